@@ -1,0 +1,74 @@
+//! The local shading frame of a medium event.
+//!
+//! Convention (design notes, "Local frame"): the geometric normal `n` — the gradient of the mean
+//! signed distance — is local `+z`; the host's tangent, projected orthogonal to `n`, is local `+x`
+//! and carries the `alpha_u` roughness; local `+y = z × x` carries `alpha_v`.
+
+use crate::error::{Error, ErrorKind, Result};
+use glam::DVec3;
+
+/// An orthonormal frame `(s, t, n)`; `to_local` and `to_world` are exact inverses up to rounding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    pub s: DVec3,
+    pub t: DVec3,
+    pub n: DVec3,
+}
+
+impl Frame {
+    /// Builds the frame from a normal and a tangent hint. Neither needs to be normalised; the
+    /// tangent is made orthogonal to `n` (Gram–Schmidt). A tangent parallel to `n` (or zero) falls
+    /// back to an arbitrary orthonormal completion, which is correct for isotropic roughness.
+    pub fn from_normal_tangent(n: DVec3, tangent: DVec3) -> Result<Frame> {
+        check_finite_vector("normal", n)?;
+        check_finite_vector("tangent", tangent)?;
+        let n = n.try_normalize().ok_or_else(|| {
+            Error::new(ErrorKind::InvalidArgument, "the normal must not be the zero vector")
+        })?;
+        // A tangent (nearly) parallel to n leaves only rounding noise after the projection;
+        // normalising that noise would give a vector that is not orthogonal to n.
+        let projected = tangent - n * n.dot(tangent);
+        let s = if projected.length() > 1e-6 * tangent.length() {
+            projected.normalize()
+        } else {
+            n.any_orthonormal_vector()
+        };
+        Ok(Frame { s, t: n.cross(s), n })
+    }
+
+    /// The frame whose `n` is world `+z`: local and world coordinates coincide.
+    pub fn identity() -> Frame {
+        Frame { s: DVec3::X, t: DVec3::Y, n: DVec3::Z }
+    }
+
+    pub fn to_local(&self, v: DVec3) -> DVec3 {
+        DVec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
+    pub fn to_world(&self, v: DVec3) -> DVec3 {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+/// Rejects NaN or infinite components; the message names `name`.
+pub fn check_finite_vector(name: &str, v: DVec3) -> Result<DVec3> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::new(ErrorKind::InvalidArgument, format!("{name} must be finite, got {v}")))
+    }
+}
+
+/// Rejects vectors that are not finite and unit length (within `1e-6`, f32 round-off of a host).
+/// Returns the vector renormalised in f64.
+pub fn check_direction(name: &str, v: DVec3) -> Result<DVec3> {
+    check_finite_vector(name, v)?;
+    let len = v.length();
+    if (len - 1.0).abs() > 1e-6 {
+        return Err(Error::new(
+            ErrorKind::InvalidArgument,
+            format!("{name} must be a unit vector, got {v} (length {len})"),
+        ));
+    }
+    Ok(v / len)
+}

@@ -1,0 +1,177 @@
+//! Gradients `g ~ N((0,0,1), diag(alpha_x², alpha_y², alpha_z²) / 2)`: the gradient of a GPSS at a
+//! zero crossing (Eq. 37, with `sigma²/l² = alpha²/2` from Eq. 4). Beckmann is the `alpha_z = 0`
+//! case (slopes are Gaussian), the generalized macrofacet the `alpha_z > 0` case.
+//!
+//! Both the projected area and exact visible-normal sampling follow from the gradient-space
+//! identity of the design notes: `∫ h(m) D(m) dm = E[|g| h(g/|g|)]`, hence
+//! `projected_area(w) = E[max(0, w·g)]` and the visible normals from `w` are the directions of
+//! `g` drawn from `N(mu, Sigma) · max(0, w·g)`. Whitening `g = mu + L z` with `L = Sigma^(1/2)`
+//! reduces that density to a 1-D density `∝ (x + c)_+ φ(x)` along `L w` times an independent
+//! standard normal in the orthogonal plane. This is exact importance sampling of the generalized
+//! vNDF, which seeds/000 leaves as future work (it uses the mixture of Eq. 40).
+
+use crate::special::{erfc, erfcx, normal_cdf, normal_pdf};
+use glam::DVec3;
+use std::f64::consts::{FRAC_1_SQRT_2, PI};
+
+const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3;
+
+/// Beyond this, `e^{-c²/2}` underflows: no flake is visible in f64 and sampling reports `None`.
+const MIN_VISIBLE_C: f64 = -38.0;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct GaussianGradient {
+    /// Standard deviations of the gradient components divided by `1/sqrt(2)`: the roughnesses.
+    pub alpha: DVec3,
+}
+
+impl GaussianGradient {
+    /// `s(w) = sqrt(alpha_x² w_x² + alpha_y² w_y² + alpha_z² w_z²)`, the denominator of `a` in
+    /// Eq. 32; `sqrt(2)` times the standard deviation of `w·g`.
+    fn s(&self, w: DVec3) -> f64 {
+        (self.alpha * w).length()
+    }
+
+    /// `E[max(0, w·g)] = s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (Eq. 32's `a`). Written
+    /// with `erfcx` for `a < 0` so that grazing-from-below directions do not cancel.
+    pub fn projected_area(&self, w: DVec3) -> f64 {
+        let s = self.s(w);
+        if s == 0.0 {
+            return w.z.max(0.0);
+        }
+        let a = w.z / s;
+        let p = if a >= 0.0 {
+            0.5 * a * erfc(-a) + 0.5 * FRAC_1_SQRT_PI * (-a * a).exp()
+        } else {
+            0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI + a * erfcx(-a))
+        };
+        s * p
+    }
+
+    /// Exact sample of the visible normals from `wi`. `u[0]` drives the 1-D density along `L wi`,
+    /// `u[1], u[2]` the orthogonal standard normal pair (Box–Muller).
+    pub fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
+        // Whitened coordinates: g = e_z + L z, z ~ N(0, I), L = diag(alpha)/sqrt(2).
+        let l = self.alpha * FRAC_1_SQRT_2;
+        let v = l * wi; // wi·g = wi.z + v·z
+        let v_len = v.length();
+        let z = if v_len == 0.0 {
+            // wi·g is the constant wi.z: every gradient is equally visible (or none is).
+            if wi.z <= 0.0 {
+                return None;
+            }
+            let (n1, n2) = box_muller(u[1], u[2]);
+            let (e1, e2) = DVec3::Z.any_orthonormal_pair();
+            e1 * n1 + e2 * n2 + DVec3::Z * crate::special::probit(u[0])
+        } else {
+            let c = wi.z / v_len;
+            if c < MIN_VISIBLE_C {
+                return None;
+            }
+            let e1 = v / v_len;
+            let (e2, e3) = e1.any_orthonormal_pair();
+            let x = sample_shifted_linear_gaussian(c, u[0]);
+            let (n2, n3) = box_muller(u[1], u[2]);
+            e1 * x + e2 * n2 + e3 * n3
+        };
+        let g = DVec3::Z + l * z;
+        let m = g.try_normalize()?;
+        // Rounding can leave a sample a hair behind the visibility plane at grazing angles.
+        (wi.dot(m) > 0.0).then_some(m)
+    }
+}
+
+/// Two independent standard normals from two uniforms in `[0, 1)`.
+pub(crate) fn box_muller(u1: f64, u2: f64) -> (f64, f64) {
+    let r = (-2.0 * (-u1).ln_1p()).sqrt();
+    let (sin, cos) = (2.0 * PI * u2).sin_cos();
+    (r * cos, r * sin)
+}
+
+/// Inverts the CDF of the density `∝ (x + c)_+ φ(x)` at `u`.
+///
+/// With `Z = φ(c) + c Φ(c)`, the unnormalised CDF is
+/// `F(x) = φ(c) − φ(x) + c [Φ(x) − Φ(−c)]` and the survival `S(x) = φ(x) + c Φ(−x)`; for `c < 0`
+/// the survival is evaluated as `φ(x) [1 − |c| M(x)]` with the Mills ratio
+/// `M(x) = Φ(−x)/φ(x) = sqrt(π/2) erfcx(x/√2)` so that nothing underflows. Newton's method on the
+/// logarithm of whichever tail is better conditioned (`ln F` below the median for `c >= 0`,
+/// `ln S` otherwise) — nearly linear in the tails, so a few steps suffice — safeguarded by
+/// bisection on the bracket `[-c, max(-c, 0) + 40]`.
+pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
+    let lower_tail = c >= 0.0 && u < 0.5;
+    // For c < 0 every φ is divided by φ(c) (so `(x + c) φ(x)` becomes `(x + c) e^{-(x²-c²)/2}`).
+    let density = |x: f64| -> f64 {
+        if c < 0.0 {
+            (x + c) * (-(x - c) * (x + c) * 0.5).exp()
+        } else {
+            (x + c) * normal_pdf(x)
+        }
+    };
+    let tail = |x: f64| -> f64 {
+        if lower_tail {
+            normal_pdf(c) - normal_pdf(x) + c * (normal_cdf(x) - normal_cdf(-c))
+        } else if c >= 0.0 {
+            normal_pdf(x) + c * normal_cdf(-x)
+        } else {
+            survival_scaled(c, x)
+        }
+    };
+    let z = if c >= 0.0 { normal_pdf(c) + c * normal_cdf(c) } else { survival_scaled(c, -c) };
+    let ln_target = if lower_tail { (u * z).ln() } else { ((-u).ln_1p()) + z.ln() };
+    // g(x) = ln tail(x) − ln target is increasing for the lower tail and decreasing for the upper.
+    let sign = if lower_tail { 1.0 } else { -1.0 };
+    let mut lo = -c;
+    let mut hi = (-c).max(0.0) + 40.0;
+    let mut x = initial_guess(c, u).clamp(lo, hi);
+    for _ in 0..60 {
+        let t = tail(x);
+        let g = sign * (t.ln() - ln_target);
+        if g.is_nan() {
+            x = 0.5 * (lo + hi);
+            continue;
+        }
+        if g < 0.0 {
+            lo = x;
+        } else if g > 0.0 {
+            hi = x;
+        } else {
+            return x;
+        }
+        let slope = density(x) / t; // |d ln tail / dx|
+        let newton = x - g / slope;
+        // A converged Newton step may land a rounding error outside the bracket: accept it.
+        if (newton - x).abs() <= 1e-13 * (1.0 + x.abs()) {
+            return newton.clamp(-c, f64::MAX);
+        }
+        let next = if slope > 0.0 && newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+        if (next - x).abs() <= 1e-13 * (1.0 + x.abs()) {
+            return next;
+        }
+        x = next;
+    }
+    x
+}
+
+/// `S(x) / φ(c)` for `c < 0`, `x >= -c`: `e^{-(x² - c²)/2} [1 − |c| M(x)]`.
+fn survival_scaled(c: f64, x: f64) -> f64 {
+    let mills = (PI / 2.0).sqrt() * erfcx(x * FRAC_1_SQRT_2);
+    (-(x - c) * (x + c) * 0.5).exp() * (1.0 + c * mills)
+}
+
+/// A starting point near the quantile: for large `c` the density is nearly `φ(x − 1/c)`; for very
+/// negative `c`, `x + c` tends to a Gamma(2, |c|) variable; in between, the Rayleigh quantile of
+/// the `c = 0` case, shifted.
+fn initial_guess(c: f64, u: f64) -> f64 {
+    if c > 3.0 {
+        crate::special::probit(u) + 1.0 / c
+    } else if c < -3.0 {
+        // Gamma(2, 1) quantile q: (1 + q) e^{-q} = 1 − u, by two fixed-point steps.
+        let w = -(-u).ln_1p();
+        let mut q = w + (1.0 + w).ln();
+        q = w + (1.0 + q).ln();
+        q = w + (1.0 + q).ln();
+        -c + q / (-c)
+    } else {
+        (-2.0 * (-u).ln_1p()).sqrt() - 0.5 * c
+    }
+}

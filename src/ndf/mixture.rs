@@ -1,0 +1,54 @@
+//! The visible-normal sampler of seeds/000 Eq. 40: with probability `R` a Beckmann visible normal
+//! (the height-field limit of the generalized NDF), otherwise a uniform direction on the
+//! hemisphere around `wi`. Kept for comparison with the paper; [`super::Gpss::sample_visible`] is
+//! exact and is the default.
+
+use super::{Gpss, MicrofacetDistribution};
+use crate::error::{Error, ErrorKind, Result};
+use glam::DVec3;
+use std::f64::consts::PI;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BeckmannUniformMixture {
+    pub ndf: Gpss,
+    /// `R` of Eq. 40, in `(0, 1)`: `R = 1` would miss the downward-facing visible normals and
+    /// `R = 0` ignores the peak.
+    pub ratio: f64,
+}
+
+impl BeckmannUniformMixture {
+    pub fn new(ndf: Gpss, ratio: f64) -> Result<Self> {
+        if !(ratio > 0.0 && ratio < 1.0) {
+            return Err(Error::new(
+                ErrorKind::InvalidValue,
+                format!("parameter \"mixture_ratio\" must lie in (0, 1), got {ratio}"),
+            ));
+        }
+        Ok(BeckmannUniformMixture { ndf, ratio })
+    }
+
+    /// Samples `m` with `u[0]` choosing the strategy (and then reused, rescaled, for it).
+    pub fn sample(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
+        if u[0] < self.ratio {
+            let u0 = u[0] / self.ratio;
+            self.ndf.beckmann().sample_visible(wi, [u0, u[1], u[2]])
+        } else {
+            let u0 = (u[0] - self.ratio) / (1.0 - self.ratio);
+            // Uniform hemisphere around wi: cos θ uniform in [0, 1).
+            let cos = 1.0 - u0;
+            let sin = (1.0 - cos * cos).max(0.0).sqrt();
+            let (s, t) = wi.any_orthonormal_pair();
+            let phi = 2.0 * PI * u[1];
+            let m = (s * phi.cos() + t * phi.sin()) * sin + wi * cos;
+            m.try_normalize()
+        }
+    }
+
+    /// `P(m) = R P_Beckmann(m) + (1 − R) / (2π)` on the hemisphere around `wi` (Eq. 40).
+    pub fn pdf(&self, wi: DVec3, m: DVec3) -> f64 {
+        if wi.dot(m) <= 0.0 {
+            return 0.0;
+        }
+        self.ratio * self.ndf.beckmann().pdf_visible(wi, m) + (1.0 - self.ratio) / (2.0 * PI)
+    }
+}

@@ -1,0 +1,304 @@
+//! Construction by named parameters, Mitsuba style, so that the same names work in a scene file,
+//! in the C ABI (`mf_params_*`) and from Rust. Unknown names, wrong types, missing or
+//! contradictory parameters and out-of-range values are errors naming the parameter.
+//!
+//! | name | type | meaning (default) |
+//! |---|---|---|
+//! | `sigma` / `variance` | float | height standard deviation σ (scene units) or σ²; exactly one |
+//! | `shell_extent` | float | k: the shell's top face at `+kσ` (3) |
+//! | `distribution` | string | `beckmann`, `ggx` or `gpss` (`gpss`) |
+//! | `alpha` | float | isotropic roughness; for `gpss` also `alpha_z` (an isotropic kernel) |
+//! | `alpha_u`, `alpha_v` | float | anisotropic roughness along the tangent / bitangent |
+//! | `alpha_z` | float | `gpss` only: roughness along the normal, `0` = height field |
+//! | `lengthscale`, `lengthscale_x/_y/_z` | float | kernel form: `alpha_i = √2 σ / l_i` (Eq. 4) |
+//! | `micro_bsdf` | string | `conductor` or `diffuse` (`conductor`) |
+//! | `material` | string | conductor preset (`Au`, `Ag`, `Cu`, `Al`, `Cr`) or `none` = mirror (`none`) |
+//! | `eta`, `k` | rgb | conductor index, instead of `material` |
+//! | `specular_reflectance` | rgb | scale of the conductor reflectance, in [0, 1] (1) |
+//! | `reflectance` | rgb | diffuse flake albedo, in [0, 1] (0.5) |
+//! | `vndf_sampling` | string | `exact` or `mixture` (Eq. 40; `gpss` with conductor flakes) (`exact`) |
+//! | `mixture_ratio` | float | R of Eq. 40, in (0, 1) (0.5) |
+
+use crate::error::{check_positive, Error, ErrorKind, Result};
+use crate::fresnel::conductor_preset;
+use crate::height::{HeightProfile, DEFAULT_SHELL_EXTENT};
+use crate::medium::MacrofacetMedium;
+use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Ndf};
+use crate::phase::{MacrofacetPhase, MicroBsdf, VndfSampling};
+use crate::Rgb;
+use std::cell::RefCell;
+
+/// A parameter value. A float is accepted where an RGB triplet is expected (grey).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamValue {
+    Float(f64),
+    Rgb(Rgb),
+    String(String),
+}
+
+impl ParamValue {
+    fn type_name(&self) -> &'static str {
+        match self {
+            ParamValue::Float(_) => "float",
+            ParamValue::Rgb(_) => "rgb",
+            ParamValue::String(_) => "string",
+        }
+    }
+}
+
+/// An ordered set of named parameters. Setting a name again replaces its value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParamSet {
+    entries: Vec<(String, ParamValue)>,
+}
+
+impl ParamSet {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn set(&mut self, name: &str, value: ParamValue) -> &mut Self {
+        match self.entries.iter_mut().find(|(n, _)| n == name) {
+            Some(entry) => entry.1 = value,
+            None => self.entries.push((name.to_owned(), value)),
+        }
+        self
+    }
+
+    pub fn set_float(&mut self, name: &str, value: f64) -> &mut Self {
+        self.set(name, ParamValue::Float(value))
+    }
+
+    pub fn set_rgb(&mut self, name: &str, value: Rgb) -> &mut Self {
+        self.set(name, ParamValue::Rgb(value))
+    }
+
+    pub fn set_string(&mut self, name: &str, value: &str) -> &mut Self {
+        self.set(name, ParamValue::String(value.to_owned()))
+    }
+
+    pub fn get(&self, name: &str) -> Option<&ParamValue> {
+        self.entries.iter().find(|(n, _)| n == name).map(|(_, v)| v)
+    }
+
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.entries.iter().map(|(n, _)| n.as_str())
+    }
+}
+
+/// Reads a [`ParamSet`] and records which names were consumed, so that leftovers are reported.
+struct Reader<'a> {
+    params: &'a ParamSet,
+    used: RefCell<Vec<&'a str>>,
+}
+
+impl<'a> Reader<'a> {
+    fn new(params: &'a ParamSet) -> Self {
+        Reader { params, used: RefCell::new(Vec::new()) }
+    }
+
+    fn take(&self, name: &str) -> Option<&'a ParamValue> {
+        let (n, v) = self.params.entries.iter().find(|(n, _)| n == name)?;
+        self.used.borrow_mut().push(n.as_str());
+        Some(v)
+    }
+
+    fn has(&self, name: &str) -> bool {
+        self.params.get(name).is_some()
+    }
+
+    fn wrong_type(name: &str, want: &str, got: &ParamValue) -> Error {
+        Error::new(
+            ErrorKind::WrongType,
+            format!("parameter \"{name}\" must be a {want}, got a {}", got.type_name()),
+        )
+    }
+
+    fn float(&self, name: &str) -> Result<Option<f64>> {
+        match self.take(name) {
+            None => Ok(None),
+            Some(ParamValue::Float(x)) if x.is_finite() => Ok(Some(*x)),
+            Some(ParamValue::Float(x)) => Err(Error::new(
+                ErrorKind::InvalidValue,
+                format!("parameter \"{name}\" must be finite, got {x}"),
+            )),
+            Some(v) => Err(Self::wrong_type(name, "float", v)),
+        }
+    }
+
+    fn rgb(&self, name: &str) -> Result<Option<Rgb>> {
+        let rgb = match self.take(name) {
+            None => return Ok(None),
+            Some(ParamValue::Float(x)) => [*x; 3],
+            Some(ParamValue::Rgb(c)) => *c,
+            Some(v) => return Err(Self::wrong_type(name, "rgb or float", v)),
+        };
+        if rgb.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            Ok(Some(rgb))
+        } else {
+            Err(Error::new(
+                ErrorKind::InvalidValue,
+                format!("parameter \"{name}\" must be finite and >= 0, got {rgb:?}"),
+            ))
+        }
+    }
+
+    fn unit_rgb(&self, name: &str, default: f64) -> Result<Rgb> {
+        let rgb = self.rgb(name)?.unwrap_or([default; 3]);
+        if rgb.iter().all(|c| *c <= 1.0) {
+            Ok(rgb)
+        } else {
+            Err(Error::new(
+                ErrorKind::InvalidValue,
+                format!("parameter \"{name}\" must lie in [0, 1] (energy conservation), got {rgb:?}"),
+            ))
+        }
+    }
+
+    fn string(&self, name: &str) -> Result<Option<&'a str>> {
+        match self.take(name) {
+            None => Ok(None),
+            Some(ParamValue::String(s)) => Ok(Some(s.as_str())),
+            Some(v) => Err(Self::wrong_type(name, "string", v)),
+        }
+    }
+
+    /// Fails on any name that was not consumed.
+    fn finish(&self) -> Result<()> {
+        let used = self.used.borrow();
+        match self.params.names().find(|n| !used.contains(n)) {
+            None => Ok(()),
+            Some(n) => Err(Error::new(
+                ErrorKind::UnknownParameter,
+                format!("unknown parameter \"{n}\" for a macrofacet medium (or not applicable to the chosen options)"),
+            )),
+        }
+    }
+}
+
+fn missing(message: String) -> Error {
+    Error::new(ErrorKind::MissingParameter, message)
+}
+
+fn invalid_choice(name: &str, got: &str, choices: &str) -> Error {
+    Error::new(ErrorKind::InvalidValue, format!("parameter \"{name}\" must be one of {choices}, got \"{got}\""))
+}
+
+/// Builds a macrofacet medium from named parameters (see the module table).
+pub fn medium_from_params(params: &ParamSet) -> Result<MacrofacetMedium> {
+    let r = Reader::new(params);
+
+    let sigma = match (r.float("sigma")?, r.float("variance")?) {
+        (Some(s), None) => check_positive("sigma", s, false)?,
+        (None, Some(v)) => check_positive("variance", v, false)?.sqrt(),
+        (Some(_), Some(_)) => return Err(missing("give either \"sigma\" or \"variance\", not both".into())),
+        (None, None) => return Err(missing("a macrofacet medium needs \"sigma\" (or \"variance\")".into())),
+    };
+    let shell_extent = r.float("shell_extent")?.unwrap_or(DEFAULT_SHELL_EXTENT);
+    let height = HeightProfile::new(sigma, shell_extent)
+        .map_err(|e| Error::new(e.kind, e.message))?;
+
+    let distribution = r.string("distribution")?.unwrap_or("gpss");
+    let alphas = read_roughness(&r, sigma, distribution == "gpss")?;
+    let ndf = match distribution {
+        "beckmann" => Ndf::Beckmann(Beckmann::new(alphas[0], alphas[1])?),
+        "ggx" => Ndf::Ggx(Ggx::new(alphas[0], alphas[1])?),
+        "gpss" => Ndf::Gpss(Gpss::new(alphas[0], alphas[1], alphas[2])?),
+        other => return Err(invalid_choice("distribution", other, "\"beckmann\", \"ggx\", \"gpss\"")),
+    };
+
+    let micro_bsdf = match r.string("micro_bsdf")?.unwrap_or("conductor") {
+        "conductor" => read_conductor(&r)?,
+        "diffuse" => MicroBsdf::Diffuse { reflectance: r.unit_rgb("reflectance", 0.5)? },
+        other => return Err(invalid_choice("micro_bsdf", other, "\"conductor\", \"diffuse\"")),
+    };
+
+    let sampling = match r.string("vndf_sampling")?.unwrap_or("exact") {
+        "exact" => VndfSampling::Exact,
+        "mixture" => {
+            let Ndf::Gpss(gpss) = ndf else {
+                return Err(Error::new(ErrorKind::InvalidValue,
+                    "vndf_sampling \"mixture\" (Eq. 40) applies to distribution \"gpss\" only"));
+            };
+            if matches!(micro_bsdf, MicroBsdf::Diffuse { .. }) {
+                return Err(Error::new(ErrorKind::InvalidValue,
+                    "vndf_sampling \"mixture\" applies to conductor flakes only"));
+            }
+            let ratio = r.float("mixture_ratio")?.unwrap_or(0.5);
+            VndfSampling::Mixture(BeckmannUniformMixture::new(gpss, ratio)?)
+        }
+        other => return Err(invalid_choice("vndf_sampling", other, "\"exact\", \"mixture\"")),
+    };
+
+    r.finish()?;
+    Ok(MacrofacetMedium { height, phase: MacrofacetPhase { ndf, micro_bsdf, sampling } })
+}
+
+/// `[alpha_x, alpha_y, alpha_z]` from either the roughness or the kernel form.
+fn read_roughness(r: &Reader, sigma: f64, with_z: bool) -> Result<[f64; 3]> {
+    let alpha_names = ["alpha", "alpha_u", "alpha_v", "alpha_z"];
+    let kernel_names = ["lengthscale", "lengthscale_x", "lengthscale_y", "lengthscale_z"];
+    let uses_alpha = alpha_names.iter().any(|n| r.has(n));
+    let uses_kernel = kernel_names.iter().any(|n| r.has(n));
+    if uses_alpha && uses_kernel {
+        return Err(missing("give the roughness either as alpha* or as lengthscale*, not both".into()));
+    }
+    if !with_z && (r.has("alpha_z") || r.has("lengthscale_z")) {
+        return Err(Error::new(ErrorKind::UnknownParameter,
+            "\"alpha_z\" / \"lengthscale_z\" apply to distribution \"gpss\" only"));
+    }
+    let (names, to_alpha): (_, &dyn Fn(&str, f64) -> Result<f64>) = if uses_kernel {
+        (kernel_names, &|n, l| Ok(alpha_from_kernel(sigma, check_positive(n, l, false)?)))
+    } else {
+        (alpha_names, &|_, a| Ok(a))
+    };
+    let [iso, x, y, z] = names.map(|n| r.float(n));
+    let (iso, x, y, z) = (iso?, x?, y?, z?);
+    let conv = |n: &str, v: Option<f64>| v.map(|v| to_alpha(n, v)).transpose();
+    let (iso, x, y, z) = (conv(names[0], iso)?, conv(names[1], x)?, conv(names[2], y)?, conv(names[3], z)?);
+    let pair = match (iso, x, y) {
+        (Some(a), None, None) => [a, a],
+        (None, Some(ax), Some(ay)) => [ax, ay],
+        (None, None, None) => {
+            return Err(missing(format!("the roughness is missing: give \"{}\" or \"{}\" and \"{}\"", names[0], names[1], names[2])))
+        }
+        _ => {
+            return Err(missing(format!("give either \"{}\" or both \"{}\" and \"{}\"", names[0], names[1], names[2])))
+        }
+    };
+    let alpha_z = match (with_z, iso, z) {
+        (false, _, _) => 0.0,
+        (true, _, Some(az)) => az,
+        (true, Some(a), None) => a, // isotropic kernel: l_x = l_y = l_z
+        (true, None, None) => {
+            return Err(missing(format!("distribution \"gpss\" with \"{}\"/\"{}\" also needs \"{}\" (0 for a height field)", names[1], names[2], names[3])))
+        }
+    };
+    Ok([pair[0], pair[1], alpha_z])
+}
+
+fn read_conductor(r: &Reader) -> Result<MicroBsdf> {
+    let specular_reflectance = r.unit_rgb("specular_reflectance", 1.0)?;
+    let material = r.string("material")?;
+    let (eta, k) = (r.rgb("eta")?, r.rgb("k")?);
+    match (material, eta, k) {
+        (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+            Err(missing("give either \"material\" or \"eta\" and \"k\", not both".into()))
+        }
+        (Some("none") | None, None, None) => Ok(MicroBsdf::Mirror { specular_reflectance }),
+        (Some(name), None, None) => {
+            let preset = conductor_preset(name).ok_or_else(|| {
+                invalid_choice("material", name, "\"none\", \"Ag\", \"Al\", \"Au\", \"Cr\", \"Cu\"")
+            })?;
+            Ok(MicroBsdf::Conductor { eta: preset.eta, k: preset.k, specular_reflectance })
+        }
+        (None, Some(eta), Some(k)) => {
+            for (c, e) in eta.iter().enumerate() {
+                check_positive("eta", *e, false).map_err(|_| Error::new(ErrorKind::InvalidValue,
+                    format!("parameter \"eta\" must be > 0 in every channel, channel {c} is {e}")))?;
+            }
+            Ok(MicroBsdf::Conductor { eta, k, specular_reflectance })
+        }
+        (None, _, _) => Err(missing("a conductor index needs both \"eta\" and \"k\"".into())),
+    }
+}

@@ -16,6 +16,8 @@ use glam::DVec3;
 pub enum WalkOutcome {
     /// Left the slab upward along `wo` with throughput `weight` after `scatterings` events.
     Escaped { wo: DVec3, weight: Rgb, scatterings: u32 },
+    /// Terminated by Russian roulette (an unbiased estimate of absorption).
+    Absorbed { scatterings: u32 },
     /// The phase function could not continue (nothing visible), or the walk hit the event cap.
     Lost { scatterings: u32 },
 }
@@ -57,6 +59,16 @@ pub fn walk_from(
         };
         for c in 0..3 {
             weight[c] *= s.weight[c];
+        }
+        // Russian roulette once the throughput has dropped below 1 (absorbing flakes): survive
+        // with probability max(weight) and compensate. Unbiased; it keeps walks in absorbing,
+        // nearly isotropic slabs from wandering for thousands of events.
+        let survival = weight.iter().cloned().fold(0.0, f64::max);
+        if survival < 1.0 {
+            if uniform() >= survival {
+                return WalkOutcome::Absorbed { scatterings: scatterings + 1 };
+            }
+            weight = weight.map(|w| w / survival);
         }
         d = s.wo;
     }

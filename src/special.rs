@@ -22,8 +22,8 @@
 //! References:
 //! - M. J. Wichura, "Algorithm AS 241: The Percentage Points of the Normal Distribution",
 //!   Applied Statistics 37(3), 477–484 (1988) — the `PPND16` rational approximations.
-//! - Laplace's continued fraction for the complementary error function, e.g. Abramowitz &
-//!   Stegun 7.1.14 / DLMF 7.9.2: `√π e^{x²} erfc x = 1/(x + (1/2)/(x + 1/(x + (3/2)/(x + …))))`.
+//! - Laplace's continued fraction for the complementary error function, Abramowitz & Stegun
+//!   7.1.14 (see also DLMF §7.9): `√π e^{x²} erfc x = 1/(x + (1/2)/(x + 1/(x + (3/2)/(x + …))))`.
 //! - The asymptotic expansion `ln Φ(x) = −x²/2 − ln(−x) − ½ln(2π) + ln(1 − 1/x² + …)`
 //!   (A&S 26.2.12) for the start of the far-tail inversion.
 //! - Dekker / fused multiply-add splitting of a product into an exact `hi + lo` pair.
@@ -97,7 +97,7 @@ pub fn erfc(x: f64) -> f64 {
 
 /// Scaled complementary error function `erfcx(x) = e^{x²} erfc(x)`.
 ///
-/// - `x ≥ 26`: Laplace's continued fraction (DLMF 7.9.2), `≈ 1/(x√π)`; never underflows
+/// - `x ≥ 26`: Laplace's continued fraction (A&S 7.1.14), `≈ 1/(x√π)`; never underflows
 ///   spuriously (`erfcx(1e300) = 5.6e-301`, `erfcx(+∞) = 0`).
 /// - `0 ≤ x < 26`: `e^{x²} erfc(x)` with `x²` split exactly into `hi + lo` and
 ///   `e^{x²} = e^{hi}(1 + lo)`.
@@ -174,7 +174,7 @@ pub fn normal_cdf(x: f64) -> f64 {
 ///
 /// - `x < 0`: `−x²/2 + ln(erfcx(−x/√2)/2)` — both terms negative, no cancellation, no underflow;
 ///   behaves like `−x²/2 − ln(−x) − ln√(2π)` as `x → −∞`. Returns `−∞` only when `x²/2`
-///   itself overflows (`x < −1.9e154`) or at `x = −∞`.
+///   itself overflows (`x < −1.34e154`; the true value is then below `−f64::MAX`) or at `x = −∞`.
 /// - `x ≥ 0`: `log1p(−Φ(−x))`, relatively accurate while `Φ(−x)` is a normal number
 ///   (`ln Φ(10) ≈ −7.62e-24`); for `x ≳ 37.5` it is a subnormal or `−0.0`
 ///   (the true value `−Φ(−x)` is below `f64`'s range). `ln Φ(+∞) = 0`.
@@ -226,6 +226,8 @@ fn rational7(num: &[f64; 8], den: &[f64; 8], r: f64) -> f64 {
 }
 
 /// AS 241 central region, `|q| ≤ 0.425` with `q = p − ½`: returns `Φ⁻¹(½ + q)`.
+// Coefficients exactly as printed by Wichura (1988), more digits than f64 holds.
+#[allow(clippy::excessive_precision)]
 #[inline]
 fn ppnd16_central(q: f64) -> f64 {
     const A: [f64; 8] = [
@@ -255,6 +257,8 @@ fn ppnd16_central(q: f64) -> f64 {
 /// AS 241 tail regions: given `r = √(−ln p)` for a lower-tail probability `p < 0.075`, returns
 /// `−Φ⁻¹(p) > 0`. Wichura's tables cover `r ≤ 27` (`p ≳ 1e-316`); beyond that (only reached
 /// through [`probit_of_ln`]) the asymptotic inversion [`tail_asymptotic`] is used.
+// Coefficients exactly as printed by Wichura (1988), more digits than f64 holds.
+#[allow(clippy::excessive_precision)]
 #[inline]
 fn ppnd16_tail(r: f64) -> f64 {
     const C: [f64; 8] = [

@@ -29,7 +29,7 @@ fn furnace(name: &str, medium: &MacrofacetMedium, wi: DVec3, paths: usize, seed:
                 assert!(wo.z > 0.0, "{name}: escaped downward {wo}");
                 weight[0]
             }
-            WalkOutcome::Lost { .. } => {
+            WalkOutcome::Lost { .. } | WalkOutcome::Absorbed { .. } => {
                 lost += 1;
                 0.0
             }
@@ -71,7 +71,7 @@ fn furnace_detects_absorbing_flakes() {
     let mut rng = Pcg32::new(3, 3);
     let (mean, _) = mean_and_standard_error((0..100_000).map(|_| match random_walk(&m, DVec3::Z, MAX_SCATTERINGS, || rng.next_f64()) {
         WalkOutcome::Escaped { weight, .. } => weight[0],
-        WalkOutcome::Lost { .. } => 0.0,
+        WalkOutcome::Lost { .. } | WalkOutcome::Absorbed { .. } => 0.0,
     }));
     assert!(mean < 0.995, "albedo {mean} with 1 % absorption per event");
 }

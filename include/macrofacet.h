@@ -121,7 +121,7 @@ typedef struct mf_rgb {
  * A sampled scattering direction. `valid` is false when nothing can be sampled (no flake visible
  * from `wi`); the other fields are then zero.
  */
-typedef struct mf_phase_sample {
+typedef struct mf_phase_sample_result {
   /**
    * New propagation direction, world space, pointing away from the event.
    */
@@ -135,7 +135,7 @@ typedef struct mf_phase_sample {
    */
   double pdf;
   bool valid;
-} mf_phase_sample;
+} mf_phase_sample_result;
 
 /**
  * One free-flight or transmittance query of a batch: the segment starts where the signed
@@ -187,9 +187,10 @@ const char *mf_version(void);
 
 /**
  * A static, NUL-terminated description of a status code (never NULL; unknown codes give
- * `"unknown status"`).
+ * `"unknown status"`). Takes the code as an integer: C may pass any value, and an out-of-range
+ * value of a Rust enum would be undefined behaviour.
  */
-const char *mf_status_str(enum mf_status status);
+const char *mf_status_str(int32_t status);
 
 /**
  * Copies the message of the last failing call on this thread into `buf` (NUL-terminated,
@@ -332,7 +333,7 @@ enum mf_status mf_phase_sample(const struct mf_medium *medium,
                                const struct mf_frame *frame_,
                                struct mf_vec3 wi,
                                const double *u,
-                               struct mf_phase_sample *out_sample);
+                               struct mf_phase_sample_result *out_sample);
 
 /**
  * Batch form of [`mf_medium_transmittance`] (`t_max` is the length, `u` is ignored).
@@ -377,7 +378,7 @@ enum mf_status mf_phase_eval_batch(const struct mf_medium *medium,
 enum mf_status mf_phase_sample_batch(const struct mf_medium *medium,
                                      const struct mf_phase_sample_query *queries,
                                      size_t count,
-                                     struct mf_phase_sample *out_samples);
+                                     struct mf_phase_sample_result *out_samples);
 
 /**
  * Creates an empty parameter set in `*out`; release it with [`mf_params_free`].

@@ -247,15 +247,18 @@ fn read_roughness(r: &Reader, sigma: f64, with_z: bool) -> Result<[f64; 3]> {
         return Err(Error::new(ErrorKind::UnknownParameter,
             "\"alpha_z\" / \"lengthscale_z\" apply to distribution \"gpss\" only"));
     }
-    let (names, to_alpha): (_, &dyn Fn(&str, f64) -> Result<f64>) = if uses_kernel {
-        (kernel_names, &|n, l| Ok(alpha_from_kernel(sigma, check_positive(n, l, false)?)))
-    } else {
-        (alpha_names, &|_, a| Ok(a))
+    let names = if uses_kernel { kernel_names } else { alpha_names };
+    // Kernel form: alpha_i = √2 σ / l_i (Eq. 4); roughness form: as given.
+    // Checked here so that the message names the parameter as given (alpha_z may be 0).
+    let to_alpha = |name: &str, v: f64| -> Result<f64> {
+        if uses_kernel {
+            Ok(alpha_from_kernel(sigma, check_positive(name, v, false)?))
+        } else {
+            check_positive(name, v, name == "alpha_z")
+        }
     };
-    let [iso, x, y, z] = names.map(|n| r.float(n));
-    let (iso, x, y, z) = (iso?, x?, y?, z?);
-    let conv = |n: &str, v: Option<f64>| v.map(|v| to_alpha(n, v)).transpose();
-    let (iso, x, y, z) = (conv(names[0], iso)?, conv(names[1], x)?, conv(names[2], y)?, conv(names[3], z)?);
+    let read = |i: usize| -> Result<Option<f64>> { r.float(names[i])?.map(|v| to_alpha(names[i], v)).transpose() };
+    let (iso, x, y, z) = (read(0)?, read(1)?, read(2)?, read(3)?);
     let pair = match (iso, x, y) {
         (Some(a), None, None) => [a, a],
         (None, Some(ax), Some(ay)) => [ax, ay],

@@ -57,9 +57,7 @@ pub fn walk_from(
         let Some(s) = medium.phase.sample(-d, u) else {
             return WalkOutcome::Lost { scatterings: scatterings + 1 };
         };
-        for c in 0..3 {
-            weight[c] *= s.weight[c];
-        }
+        weight = [0, 1, 2].map(|c| weight[c] * s.weight[c]);
         // Russian roulette once the throughput has dropped below 1 (absorbing flakes): survive
         // with probability max(weight) and compensate. Unbiased; it keeps walks in absorbing,
         // nearly isotropic slabs from wandering for thousands of events.

@@ -57,7 +57,7 @@ pub struct mf_free_flight {
 /// from `wi`); the other fields are then zero.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct mf_phase_sample {
+pub struct mf_phase_sample_result {
     /// New propagation direction, world space, pointing away from the event.
     pub wo: mf_vec3,
     /// `p(wi, wo) / pdf`: the throughput factor (includes the flakes' reflectance).
@@ -257,9 +257,10 @@ pub unsafe extern "C" fn mf_medium_majorant(
     })
 }
 
-fn flight_args(q: &mf_flight_query) -> FfiResult<(f64, DVec3, f64)> {
+/// Validates a segment query; `length_name` is how the caller's API calls the length.
+fn flight_args(q: &mf_flight_query, length_name: &str) -> FfiResult<(f64, DVec3, f64)> {
     let fr = frame(&q.frame)?;
-    Ok((finite("f", q.f)?, local_direction(&fr, "d", q.d)?, length("t_max", q.t_max)?))
+    Ok((finite("f", q.f)?, local_direction(&fr, "d", q.d)?, length(length_name, q.t_max)?))
 }
 
 /// Optical depth along a segment from signed distance `f` along `d` for length `t` (+inf allowed),
@@ -279,7 +280,7 @@ pub unsafe extern "C" fn mf_medium_optical_depth(
     boundary(|| {
         let m = arg(medium, "medium")?;
         let q = mf_flight_query { frame: *arg(frame_, "frame")?, f, d, t_max: t, u: 0.0 };
-        let (f, d, t) = flight_args(&q)?;
+        let (f, d, t) = flight_args(&q, "t")?;
         let slot = out(out_tau, "out_tau")?;
         *slot = m.inner.optical_depth(f, d, t);
         Ok(())
@@ -302,7 +303,7 @@ pub unsafe extern "C" fn mf_medium_transmittance(
     boundary(|| {
         let m = arg(medium, "medium")?;
         let q = mf_flight_query { frame: *arg(frame_, "frame")?, f, d, t_max: t, u: 0.0 };
-        let (f, d, t) = flight_args(&q)?;
+        let (f, d, t) = flight_args(&q, "t")?;
         let slot = out(out_transmittance, "out_transmittance")?;
         *slot = m.inner.transmittance(f, d, t);
         Ok(())
@@ -310,7 +311,7 @@ pub unsafe extern "C" fn mf_medium_transmittance(
 }
 
 fn free_flight(m: &MacrofacetMedium, q: &mf_flight_query) -> FfiResult<mf_free_flight> {
-    let (f, d, t_max) = flight_args(q)?;
+    let (f, d, t_max) = flight_args(q, "t_max")?;
     let u = uniform("u", q.u)?;
     Ok(match m.sample_free_flight(f, d, t_max, u) {
         FreeFlight::Scatter { t } => mf_free_flight { scattered: true, t },
@@ -393,15 +394,15 @@ pub unsafe extern "C" fn mf_phase_pdf(
     })
 }
 
-fn phase_sample(m: &MacrofacetMedium, q: &mf_phase_sample_query) -> FfiResult<mf_phase_sample> {
+fn phase_sample(m: &MacrofacetMedium, q: &mf_phase_sample_query) -> FfiResult<mf_phase_sample_result> {
     let fr = frame(&q.frame)?;
     let wi = local_direction(&fr, "wi", q.wi)?;
     for (i, u) in q.u.iter().enumerate() {
         uniform(&format!("u[{i}]"), *u)?;
     }
     Ok(match m.phase.sample(wi, q.u) {
-        Some(s) => mf_phase_sample { wo: fr.to_world(s.wo).into(), weight: rgb(s.weight), pdf: s.pdf, valid: true },
-        None => mf_phase_sample { wo: DVec3::ZERO.into(), weight: rgb([0.0; 3]), pdf: 0.0, valid: false },
+        Some(s) => mf_phase_sample_result { wo: fr.to_world(s.wo).into(), weight: rgb(s.weight), pdf: s.pdf, valid: true },
+        None => mf_phase_sample_result { wo: DVec3::ZERO.into(), weight: rgb([0.0; 3]), pdf: 0.0, valid: false },
     })
 }
 
@@ -416,7 +417,7 @@ pub unsafe extern "C" fn mf_phase_sample(
     frame_: *const mf_frame,
     wi: mf_vec3,
     u: *const f64,
-    out_sample: *mut mf_phase_sample,
+    out_sample: *mut mf_phase_sample_result,
 ) -> mf_status {
     boundary(|| {
         let m = arg(medium, "medium")?;
@@ -472,7 +473,7 @@ pub unsafe extern "C" fn mf_medium_transmittance_batch(
     out_transmittance: *mut f64,
 ) -> mf_status {
     batch(medium, queries, count, out_transmittance, |m, q| {
-        let (f, d, t) = flight_args(q)?;
+        let (f, d, t) = flight_args(q, "t_max")?;
         Ok(m.transmittance(f, d, t))
     })
 }
@@ -515,7 +516,7 @@ pub unsafe extern "C" fn mf_phase_sample_batch(
     medium: *const mf_medium,
     queries: *const mf_phase_sample_query,
     count: usize,
-    out_samples: *mut mf_phase_sample,
+    out_samples: *mut mf_phase_sample_result,
 ) -> mf_status {
     batch(medium, queries, count, out_samples, phase_sample)
 }

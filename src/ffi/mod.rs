@@ -143,11 +143,11 @@ pub extern "C" fn mf_version() -> *const c_char {
 }
 
 /// A static, NUL-terminated description of a status code (never NULL; unknown codes give
-/// `"unknown status"`).
+/// `"unknown status"`). Takes the code as an integer: C may pass any value, and an out-of-range
+/// value of a Rust enum would be undefined behaviour.
 #[no_mangle]
-pub extern "C" fn mf_status_str(status: mf_status) -> *const c_char {
-    // The argument may hold a value that is not a declared enumerator: compare as integers.
-    let text: &'static str = match status as i32 {
+pub extern "C" fn mf_status_str(status: i32) -> *const c_char {
+    let text: &'static str = match status {
         0 => "success\0",
         7101 => "a required pointer argument was NULL\0",
         7102 => "invalid argument (NaN, infinite, not unit length or out of range)\0",

@@ -1,0 +1,43 @@
+# cmake -P script run by the build (see the top-level CMakeLists.txt): builds the crate's library
+# targets with cargo, shows cargo's output live, and records what rustc reports as the native libs
+# of the staticlib.
+#
+# Inputs (-D): CARGO, MANIFEST, TARGET_DIR, PROFILE, SONAME, EXTRA_FLAGS (;-list), NATIVE_LIBS_FILE,
+# OUTPUTS (|-separated files cargo must have produced).
+foreach(var CARGO MANIFEST TARGET_DIR PROFILE SONAME NATIVE_LIBS_FILE OUTPUTS)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "CargoBuild.cmake: ${var} is not set")
+  endif()
+endforeach()
+
+# `cargo rustc --lib`: one rustc run makes the rlib, the staticlib and the cdylib. The extra rustc
+# arguments reach only that final run: a SONAME for the .so and the native-libs report.
+execute_process(
+  COMMAND "${CARGO}" rustc --lib --profile "${PROFILE}" --manifest-path "${MANIFEST}"
+          --target-dir "${TARGET_DIR}" ${EXTRA_FLAGS}
+          -- "-Clink-arg=-Wl,-soname,${SONAME}" --print native-static-libs
+  RESULT_VARIABLE result
+  OUTPUT_VARIABLE out
+  ERROR_VARIABLE err
+  ECHO_OUTPUT_VARIABLE
+  ECHO_ERROR_VARIABLE)
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "cargo failed (exit status ${result})")
+endif()
+
+# rustc prints the list only when it actually re-links; keep the last one seen.
+string(REGEX MATCH "native-static-libs: ([^\n]*)" match "${out}\n${err}")
+if(match)
+  string(STRIP "${CMAKE_MATCH_1}" libs)
+  file(WRITE "${NATIVE_LIBS_FILE}" "${libs}\n")
+endif()
+
+string(REPLACE "|" ";" outputs "${OUTPUTS}")
+foreach(f IN LISTS outputs)
+  if(NOT EXISTS "${f}")
+    message(FATAL_ERROR "cargo succeeded but did not produce ${f}")
+  endif()
+  # cargo leaves an up-to-date library untouched; mark it current so that the build does not
+  # re-run this step every time (the inputs may be newer after a no-op edit).
+  file(TOUCH_NOCREATE "${f}")
+endforeach()

@@ -1,0 +1,1154 @@
+/* C ABI test of libmacrofacet: calls every function declared in include/macrofacet.h (the test
+ * `abi_test_covers_header` fails when a declared function is not called here).
+ *
+ * What it checks, and why the tolerances are what they are:
+ *  - Struct layout: sizes and offsets equal the numbers tests/ffi_abi.rs checks on the Rust side
+ *    (exact: a layout mismatch is an ABI break).
+ *  - Version and status strings: mf_version() == MF_VERSION_STRING == MAJOR.MINOR.PATCH; every
+ *    status has its own description; unknown codes give "unknown status" (exact).
+ *  - Construction from named parameters for every distribution, the kernel form, the conductor
+ *    presets, eta/k, diffuse flakes and the Eq. 40 mixture; and every way construction fails
+ *    (status, message naming the parameter, out-parameter untouched).
+ *  - Physics identities against formulas evaluated here, independently of the library:
+ *      sigma_t(f, d) / rho(f) == sigma(d) == Lambda(d) cos(theta_d) with Lambda of Eq. 32, and
+ *      Smith's G1: the transmittance from f = h upward to +inf equals Phi(h/sigma)^Lambda.
+ *    Tolerance 1e-10 relative: the library evaluates these in cancellation-free forms (erfc,
+ *    erfcx, log Phi), this test with the textbook forms (erf(a) - 1, pow); for the directions used
+ *    (a <= 3) the textbook forms lose at most ~4 digits of the 16. Shell extent 8 makes the
+ *    truncation factor Phi(8)^Lambda differ from 1 by < 1e-15.
+ *  - transmittance == exp(-optical_depth) (1e-15 relative: the same libm exp on both sides, so it
+ *    is exact in practice; the margin allows one rounding), optical depth additivity (1e-12: a
+ *    difference of logarithms), free flights invert the transmittance (1e-9: Newton stops at
+ *    1e-14 relative in t), majorant bounds.
+ *  - Phase function: the projected-area-weighted symmetry p(wi,wo) sigma(-wi) == p(wo,wi)
+ *    sigma(-wo) (1e-12; exact up to the rounding of wi.m vs wo.m); sampled directions have
+ *    pdf > 0, pdf(wi, wo) == sample.pdf and weight == eval / pdf (1e-9: wo is re-reflected and the
+ *    half vector recomputed); for conductors weight == Fresnel(wi.m) from a complex-arithmetic
+ *    Fresnel written here (1e-10); mirror weight == 1 and diffuse weight == albedo exactly.
+ *  - A few values against numbers printed once from the Rust core (1e-12 relative: the same code
+ *    runs, but another libm may round exp/log differently in the last place).
+ *  - Batches equal single calls bit for bit (same code path, no tolerance).
+ *  - Bad calls for every entry point: NULL handle / out-pointer / frame / u, NaN and non-unit
+ *    directions, NaN or infinite f, negative t, u outside [0,1), bad parameters: the exact status,
+ *    a message naming the problem, and the out-parameter untouched (pre-filled sentinel bytes).
+ *  - *_free(NULL) is a no-op; every handle created is freed (the ASan build checks for leaks).
+ */
+#include "macrofacet.h"
+
+/* The result type of mf_phase_sample(); this alias is the one line to adjust if it is renamed. */
+typedef mf_phase_sample_result phase_sample_t;
+
+#include <complex.h>
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Strict C11 has no PI; SQRT2 is the double nearest sqrt(2), as Rust's SQRT_2. */
+#define PI 3.14159265358979323846
+#define SQRT2 1.41421356237309504880
+
+/* ------------------------------------------------------------------------------ harness */
+
+static int g_failures = 0;
+static int g_checks = 0;
+
+#define CHECK(cond, ...)                                                                    \
+  do {                                                                                      \
+    ++g_checks;                                                                             \
+    if (!(cond)) {                                                                          \
+      ++g_failures;                                                                         \
+      fprintf(stderr, "%s:%d: CHECK(%s) failed: ", __FILE__, __LINE__, #cond);              \
+      fprintf(stderr, __VA_ARGS__);                                                         \
+      fputc('\n', stderr);                                                                  \
+    }                                                                                       \
+  } while (0)
+
+static const char *last_error(void) {
+  static char buf[1024];
+  size_t len = 0;
+  buf[0] = 'X';
+  buf[1] = 0;
+  mf_status s = mf_last_error_message(buf, sizeof buf, &len);
+  if (s != MF_OK) {
+    return "<mf_last_error_message failed>";
+  }
+  return buf;
+}
+
+/* Checks status and, for an error, that the thread's last message contains `needle`. */
+static void expect_status_at(const char *file, int line, const char *what, mf_status got, mf_status want,
+                             const char *needle) {
+  ++g_checks;
+  if (got != want) {
+    ++g_failures;
+    fprintf(stderr, "%s:%d: %s: status %d (%s), expected %d (%s); last error: \"%s\"\n", file, line, what,
+            (int)got, mf_status_str(got), (int)want, mf_status_str(want), last_error());
+    return;
+  }
+  if (want != MF_OK && needle != NULL) {
+    const char *msg = last_error();
+    ++g_checks;
+    if (strstr(msg, needle) == NULL) {
+      ++g_failures;
+      fprintf(stderr, "%s:%d: %s: message \"%s\" does not mention \"%s\"\n", file, line, what, msg, needle);
+    }
+  }
+}
+#define EXPECT_STATUS(call, want, needle) expect_status_at(__FILE__, __LINE__, #call, (call), (want), (needle))
+#define EXPECT_OK(call) expect_status_at(__FILE__, __LINE__, #call, (call), MF_OK, NULL)
+
+static int close_rel(double a, double b, double rel) {
+  if (a == b) return 1;
+  double scale = fabs(b) > 1e-300 ? fabs(b) : 1e-300;
+  return fabs(a - b) <= rel * scale;
+}
+#define CHECK_REL(a, b, rel)                                                                           \
+  CHECK(close_rel((a), (b), (rel)), "%s = %.17g, %s = %.17g, relative difference %.3g > %.1g", #a, (double)(a), \
+        #b, (double)(b), fabs((double)(a) - (double)(b)) / fabs((double)(b)), (double)(rel))
+#define CHECK_ABS(a, b, tol)                                                                                  \
+  CHECK(fabs((a) - (b)) <= (tol), "%s = %.17g, %s = %.17g, difference %.3g > %.1g", #a, (double)(a), #b, \
+        (double)(b), fabs((double)(a) - (double)(b)), (double)(tol))
+
+static int same_bits(const void *a, const void *b, size_t n) { return memcmp(a, b, n) == 0; }
+
+/* A deterministic generator (splitmix64): uniforms in [0, 1) with 53 bits. */
+static uint64_t g_rng = 0x9E3779B97F4A7C15ull;
+static double uniform01(void) {
+  uint64_t z = (g_rng += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return (double)(z >> 11) * 0x1.0p-53;
+}
+
+/* ------------------------------------------------------------------------------ vectors */
+
+static mf_vec3 v3(double x, double y, double z) {
+  mf_vec3 v = {x, y, z};
+  return v;
+}
+static double dot(mf_vec3 a, mf_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static mf_vec3 scale(mf_vec3 a, double s) { return v3(a.x * s, a.y * s, a.z * s); }
+static mf_vec3 add(mf_vec3 a, mf_vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static mf_vec3 normalize(mf_vec3 a) { return scale(a, 1.0 / sqrt(dot(a, a))); }
+static mf_vec3 cross(mf_vec3 a, mf_vec3 b) {
+  return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+/* The orthonormal frame the library builds from an mf_frame (normal normalised, tangent made
+ * orthogonal), reproduced here for the analytic checks. */
+typedef struct basis {
+  mf_vec3 s, t, n;
+} basis;
+static basis basis_of(mf_frame f) {
+  basis b;
+  b.n = normalize(f.normal);
+  b.s = normalize(add(f.tangent, scale(b.n, -dot(b.n, f.tangent))));
+  b.t = cross(b.n, b.s);
+  return b;
+}
+static mf_vec3 to_world(basis b, mf_vec3 l) { return add(add(scale(b.s, l.x), scale(b.t, l.y)), scale(b.n, l.z)); }
+static mf_vec3 to_local(basis b, mf_vec3 w) { return v3(dot(w, b.s), dot(w, b.t), dot(w, b.n)); }
+static mf_vec3 spherical(double theta, double phi) {
+  return v3(sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta));
+}
+
+static const mf_frame FRAME_Z = {{0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}};
+/* A tilted frame given unnormalised: n = (1,2,2)/3, tangent (2,1,-2)/3 (orthogonal). */
+static const mf_frame FRAME_TILTED = {{1.0, 2.0, 2.0}, {2.0, 1.0, -2.0}};
+
+/* ------------------------------------------------------------------------------ reference maths */
+
+static double normal_cdf(double x) { return 0.5 * erfc(-x / sqrt(2.0)); }
+static double normal_pdf(double x) { return exp(-0.5 * x * x) / sqrt(2.0 * PI); }
+/* Flake density rho(f) = phi(f/sigma) / (sigma Phi(f/sigma)), Eq. 13. */
+static double density(double f, double sigma) { return normal_pdf(f / sigma) / (sigma * normal_cdf(f / sigma)); }
+
+/* Smith's Lambda of Eq. 32 for a direction with positive z (local frame):
+ * Lambda = exp(-a^2) / (2 a sqrt(pi)) + (erf(a) - 1) / 2, with erf(a) - 1 written as -erfc(a)
+ * (the same number; erf(a) rounds to 1 for a > 6 and the difference would vanish). */
+static double lambda_gaussian(mf_vec3 d, double ax, double ay, double az) {
+  double s = sqrt(ax * ax * d.x * d.x + ay * ay * d.y * d.y + az * az * d.z * d.z);
+  double a = d.z / s;
+  return exp(-a * a) / (2.0 * a * sqrt(PI)) - erfc(a) / 2.0;
+}
+/* GGX Lambda for positive z: (-1 + sqrt(1 + 1/a^2)) / 2, a = cos / (alpha_phi sin). */
+static double lambda_ggx(mf_vec3 d, double ax, double ay) {
+  double s = sqrt(ax * ax * d.x * d.x + ay * ay * d.y * d.y);
+  double a = d.z / s;
+  return 0.5 * (-1.0 + sqrt(1.0 + 1.0 / (a * a)));
+}
+/* sigma(d) = projected area against propagation along d: Lambda(d) cos(theta_d) for d up,
+ * (1 + Lambda(-d)) cos(theta_-d) for d down. `lambda` takes an upward local direction. */
+typedef double (*lambda_fn)(mf_vec3 d, const double *alpha);
+static double lambda_gauss_cb(mf_vec3 d, const double *a) { return lambda_gaussian(d, a[0], a[1], a[2]); }
+static double lambda_ggx_cb(mf_vec3 d, const double *a) { return lambda_ggx(d, a[0], a[1]); }
+static double projected_sigma(mf_vec3 d_local, lambda_fn lambda, const double *alpha) {
+  if (d_local.z > 0.0) return lambda(d_local, alpha) * d_local.z;
+  mf_vec3 up = scale(d_local, -1.0);
+  return (1.0 + lambda(up, alpha)) * up.z;
+}
+
+/* Unpolarised Fresnel reflectance of a conductor, from complex amplitudes (n = eta + i k). */
+static double fresnel_conductor(double cos_i, double eta, double k) {
+  double complex n = eta + k * I;
+  double complex n2 = n * n;
+  double sin2 = 1.0 - cos_i * cos_i;
+  double complex root = csqrt(n2 - sin2);
+  double complex rs = (cos_i - root) / (cos_i + root);
+  double complex rp = (n2 * cos_i - root) / (n2 * cos_i + root);
+  double as = cabs(rs), ap = cabs(rp);
+  return 0.5 * (as * as + ap * ap);
+}
+
+/* ------------------------------------------------------------------------------ media */
+
+typedef struct named_float {
+  const char *name;
+  double value;
+} named_float;
+
+/* Builds a medium from float, rgb and string parameters; NULL-terminated lists. */
+static mf_medium *build(const named_float *floats, const char *const *strings, const char *rgb_name,
+                        const double *rgb, const char *rgb_name2, const double *rgb2) {
+  mf_params *p = NULL;
+  mf_medium *m = NULL;
+  EXPECT_OK(mf_params_new(&p));
+  for (; floats && floats->name; ++floats) EXPECT_OK(mf_params_set_float(p, floats->name, floats->value));
+  for (; strings && strings[0]; strings += 2) EXPECT_OK(mf_params_set_string(p, strings[0], strings[1]));
+  if (rgb_name) EXPECT_OK(mf_params_set_rgb(p, rgb_name, rgb));
+  if (rgb_name2) EXPECT_OK(mf_params_set_rgb(p, rgb_name2, rgb2));
+  EXPECT_OK(mf_medium_new(p, &m));
+  mf_params_free(p);
+  CHECK(m != NULL, "medium not built: %s", last_error());
+  return m;
+}
+
+static const double GPSS_ALPHA[3] = {0.3, 0.6, 0.4};
+static const double GPSS_SIGMA = 0.5;
+static const double COND_ETA[3] = {0.2, 0.9, 1.1};
+static const double COND_K[3] = {3.9, 2.4, 2.1};
+
+/* The main test medium: generalized macrofacet, conductor flakes, shell extent 8. */
+static mf_medium *gpss_conductor(void) {
+  const named_float f[] = {{"sigma", GPSS_SIGMA}, {"shell_extent", 8.0},      {"alpha_u", GPSS_ALPHA[0]},
+                           {"alpha_v", GPSS_ALPHA[1]}, {"alpha_z", GPSS_ALPHA[2]}, {NULL, 0}};
+  return build(f, NULL, "eta", COND_ETA, "k", COND_K);
+}
+
+/* ------------------------------------------------------------------------------ tests */
+
+/* Layout shared with Rust (tests/ffi_abi.rs asserts the same numbers with offset_of!). */
+_Static_assert(sizeof(mf_vec3) == 24 && offsetof(mf_vec3, y) == 8 && offsetof(mf_vec3, z) == 16, "mf_vec3");
+_Static_assert(sizeof(mf_rgb) == 24 && offsetof(mf_rgb, g) == 8 && offsetof(mf_rgb, b) == 16, "mf_rgb");
+_Static_assert(sizeof(mf_frame) == 48 && offsetof(mf_frame, tangent) == 24, "mf_frame");
+_Static_assert(sizeof(mf_free_flight) == 16 && offsetof(mf_free_flight, t) == 8, "mf_free_flight");
+_Static_assert(sizeof(phase_sample_t) == 64 && offsetof(phase_sample_t, weight) == 24 &&
+                   offsetof(phase_sample_t, pdf) == 48 && offsetof(phase_sample_t, valid) == 56,
+               "phase_sample_t");
+_Static_assert(sizeof(mf_flight_query) == 96 && offsetof(mf_flight_query, f) == 48 &&
+                   offsetof(mf_flight_query, d) == 56 && offsetof(mf_flight_query, t_max) == 80 &&
+                   offsetof(mf_flight_query, u) == 88,
+               "mf_flight_query");
+_Static_assert(sizeof(mf_phase_query) == 96 && offsetof(mf_phase_query, wi) == 48 && offsetof(mf_phase_query, wo) == 72,
+               "mf_phase_query");
+_Static_assert(sizeof(mf_phase_value) == 32 && offsetof(mf_phase_value, pdf) == 24, "mf_phase_value");
+_Static_assert(sizeof(mf_phase_sample_query) == 112 && offsetof(mf_phase_sample_query, wi) == 48 &&
+                   offsetof(mf_phase_sample_query, u) == 72,
+               "mf_phase_sample_query");
+_Static_assert(sizeof(mf_status) == 4, "mf_status is a C int-sized enum");
+_Static_assert(MF_PHASE_SAMPLE_DIMENSIONS == 5, "phase sample dimensions");
+
+static void test_version_and_status(void) {
+  const char *v = mf_version();
+  CHECK(v != NULL && strcmp(v, MF_VERSION_STRING) == 0, "mf_version() = %s, header %s", v ? v : "(null)",
+        MF_VERSION_STRING);
+  char expected[64];
+  snprintf(expected, sizeof expected, "%d.%d.%d", MF_VERSION_MAJOR, MF_VERSION_MINOR, MF_VERSION_PATCH);
+  CHECK(strcmp(MF_VERSION_STRING, expected) == 0, "MF_VERSION_STRING %s vs macros %s", MF_VERSION_STRING, expected);
+
+  const mf_status all[] = {MF_OK,
+                           MF_ERROR_NULL_POINTER,
+                           MF_ERROR_INVALID_ARGUMENT,
+                           MF_ERROR_UNKNOWN_PARAMETER,
+                           MF_ERROR_WRONG_TYPE,
+                           MF_ERROR_MISSING_PARAMETER,
+                           MF_ERROR_INVALID_VALUE,
+                           MF_ERROR_INVALID_UTF8,
+                           MF_ERROR_INTERNAL};
+  const size_t n = sizeof all / sizeof all[0];
+  CHECK(MF_OK == 0, "MF_OK must be 0");
+  for (size_t i = 0; i < n; ++i) {
+    const char *s = mf_status_str(all[i]);
+    CHECK(s != NULL && s[0] != 0, "status %d has no description", (int)all[i]);
+    CHECK(s != NULL && strcmp(s, "unknown status") != 0, "status %d described as unknown", (int)all[i]);
+    if (i > 0) CHECK((int)all[i] >= 7100 && (int)all[i] <= 7199, "error %d outside 7100-7199", (int)all[i]);
+    for (size_t j = 0; j < i; ++j) {
+      CHECK(strcmp(s, mf_status_str(all[j])) != 0, "statuses %d and %d share a description", (int)all[i],
+            (int)all[j]);
+    }
+  }
+  CHECK(strcmp(mf_status_str(MF_OK), "success") == 0, "MF_OK: %s", mf_status_str(MF_OK));
+  /* Values that are not enumerators (valid in C: the enum is an integer type). */
+  const int unknown[] = {1, 7100, 7108, 7150, 7198, 7200, 4242};
+  for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {
+    const char *s = mf_status_str((mf_status)unknown[i]);
+    CHECK(s != NULL && strcmp(s, "unknown status") == 0, "mf_status_str(%d) = \"%s\"", unknown[i], s ? s : "(null)");
+  }
+}
+
+static void test_last_error_message(void) {
+  /* Nothing has failed on this thread yet: empty message, length 0. */
+  char buf[64];
+  size_t len = 99;
+  memset(buf, 'X', sizeof buf);
+  EXPECT_OK(mf_last_error_message(buf, sizeof buf, &len));
+  CHECK(buf[0] == 0 && len == 0, "fresh thread: \"%s\" (len %zu)", buf, len);
+
+  /* Produce an error and read it back in every way. */
+  EXPECT_STATUS(mf_params_new(NULL), MF_ERROR_NULL_POINTER, "out_params");
+  const char *full = "out_params must not be NULL";
+  size_t full_len = strlen(full);
+  len = 0;
+  EXPECT_OK(mf_last_error_message(NULL, 0, &len)); /* length query */
+  CHECK(len == full_len, "length query gave %zu, expected %zu", len, full_len);
+  memset(buf, 'X', sizeof buf);
+  EXPECT_OK(mf_last_error_message(buf, sizeof buf, &len));
+  CHECK(strcmp(buf, full) == 0 && len == full_len, "message \"%s\" (len %zu)", buf, len);
+  memset(buf, 'X', sizeof buf);
+  EXPECT_OK(mf_last_error_message(buf, 5, &len)); /* truncated to 4 bytes + NUL */
+  CHECK(memcmp(buf, "out_", 4) == 0 && buf[4] == 0 && buf[5] == 'X' && len == full_len,
+        "truncated message \"%s\" (len %zu)", buf, len);
+  memset(buf, 'X', sizeof buf);
+  EXPECT_OK(mf_last_error_message(buf, 1, NULL)); /* only the NUL fits; out_len may be NULL */
+  CHECK(buf[0] == 0 && buf[1] == 'X', "len 1 must write only the NUL");
+  len = 12345;
+  EXPECT_STATUS(mf_last_error_message(NULL, 8, &len), MF_ERROR_NULL_POINTER, NULL);
+  CHECK(len == 12345, "out_len written on failure: %zu", len);
+  /* A successful call does not clear the message (it is the last *failing* call's). */
+  mf_params *p = NULL;
+  EXPECT_OK(mf_params_new(&p));
+  CHECK(strcmp(last_error(), full) == 0, "message after a successful call: \"%s\"", last_error());
+  mf_params_free(p);
+}
+
+static void test_params_errors(void) {
+  mf_params *p = NULL;
+  EXPECT_OK(mf_params_new(&p));
+  const double rgb[3] = {0.5, 0.5, 0.5};
+  const double rgb_nan[3] = {0.5, NAN, 0.5};
+
+  EXPECT_STATUS(mf_params_set_float(NULL, "sigma", 1.0), MF_ERROR_NULL_POINTER, "params");
+  EXPECT_STATUS(mf_params_set_float(p, NULL, 1.0), MF_ERROR_NULL_POINTER, "name");
+  EXPECT_STATUS(mf_params_set_float(p, "sigma", NAN), MF_ERROR_INVALID_VALUE, "finite");
+  EXPECT_STATUS(mf_params_set_float(p, "sigma", INFINITY), MF_ERROR_INVALID_VALUE, "finite");
+  EXPECT_STATUS(mf_params_set_float(p, "\xff\xfe", 1.0), MF_ERROR_INVALID_UTF8, "name");
+
+  EXPECT_STATUS(mf_params_set_rgb(NULL, "eta", rgb), MF_ERROR_NULL_POINTER, "params");
+  EXPECT_STATUS(mf_params_set_rgb(p, NULL, rgb), MF_ERROR_NULL_POINTER, "name");
+  EXPECT_STATUS(mf_params_set_rgb(p, "eta", NULL), MF_ERROR_NULL_POINTER, "rgb");
+  EXPECT_STATUS(mf_params_set_rgb(p, "eta", rgb_nan), MF_ERROR_INVALID_VALUE, "finite");
+
+  EXPECT_STATUS(mf_params_set_string(NULL, "distribution", "ggx"), MF_ERROR_NULL_POINTER, "params");
+  EXPECT_STATUS(mf_params_set_string(p, NULL, "ggx"), MF_ERROR_NULL_POINTER, "name");
+  EXPECT_STATUS(mf_params_set_string(p, "distribution", NULL), MF_ERROR_NULL_POINTER, "value");
+  EXPECT_STATUS(mf_params_set_string(p, "distribution", "gg\xc3"), MF_ERROR_INVALID_UTF8, "value");
+
+  /* None of the failed calls stored anything: the set is still empty, so building a medium
+   * reports the missing sigma (and not, e.g., a wrong "distribution"). */
+  mf_medium *sentinel = (mf_medium *)(uintptr_t)0x5EAF00D;
+  mf_medium *m = sentinel;
+  EXPECT_STATUS(mf_medium_new(p, &m), MF_ERROR_MISSING_PARAMETER, "sigma");
+  CHECK(m == sentinel, "out_medium written on failure");
+  mf_params_free(p);
+
+  mf_params_free(NULL); /* no-op */
+  mf_medium_free(NULL); /* no-op */
+}
+
+/* One failing construction: the status, the message and an untouched out-parameter. */
+typedef struct bad_build {
+  const char *what;
+  named_float floats[6];
+  const char *strings[8];
+  const char *rgb_name;
+  double rgb[3];
+  mf_status status;
+  const char *needle;
+} bad_build;
+
+static void test_medium_new_errors(void) {
+  const bad_build cases[] = {
+      {"no sigma", {{"alpha", 0.3}}, {NULL}, NULL, {0}, MF_ERROR_MISSING_PARAMETER, "sigma"},
+      {"negative sigma", {{"sigma", -1.0}, {"alpha", 0.3}}, {NULL}, NULL, {0}, MF_ERROR_INVALID_VALUE, "sigma"},
+      {"zero variance", {{"variance", 0.0}, {"alpha", 0.3}}, {NULL}, NULL, {0}, MF_ERROR_INVALID_VALUE, "variance"},
+      {"sigma and variance", {{"sigma", 1.0}, {"variance", 1.0}, {"alpha", 0.3}}, {NULL}, NULL, {0},
+       MF_ERROR_MISSING_PARAMETER, "variance"},
+      {"unknown name", {{"sigma", 1.0}, {"alpha", 0.3}, {"sigmaa", 1.0}}, {NULL}, NULL, {0},
+       MF_ERROR_UNKNOWN_PARAMETER, "sigmaa"},
+      {"wrong type (string for float)", {{"alpha", 0.3}}, {"sigma", "1.0", NULL}, NULL, {0}, MF_ERROR_WRONG_TYPE,
+       "sigma"},
+      {"wrong type (float for string)", {{"sigma", 1.0}, {"alpha", 0.3}, {"distribution", 1.0}}, {NULL}, NULL, {0},
+       MF_ERROR_WRONG_TYPE, "distribution"},
+      {"wrong type (rgb for float)", {{"sigma", 1.0}}, {NULL}, "alpha", {0.1, 0.2, 0.3}, MF_ERROR_WRONG_TYPE, "alpha"},
+      {"unknown distribution", {{"sigma", 1.0}, {"alpha", 0.3}}, {"distribution", "phong", NULL}, NULL, {0},
+       MF_ERROR_INVALID_VALUE, "distribution"},
+      {"no roughness", {{"sigma", 1.0}}, {NULL}, NULL, {0}, MF_ERROR_MISSING_PARAMETER, "alpha"},
+      {"negative alpha", {{"sigma", 1.0}, {"alpha", -0.3}}, {"distribution", "ggx", NULL}, NULL, {0},
+       MF_ERROR_INVALID_VALUE, "alpha"},
+      {"alpha_z on beckmann", {{"sigma", 1.0}, {"alpha", 0.3}, {"alpha_z", 0.3}}, {"distribution", "beckmann", NULL},
+       NULL, {0}, MF_ERROR_UNKNOWN_PARAMETER, "alpha_z"},
+      {"gpss anisotropic without alpha_z", {{"sigma", 1.0}, {"alpha_u", 0.3}, {"alpha_v", 0.2}}, {NULL}, NULL, {0},
+       MF_ERROR_MISSING_PARAMETER, "alpha_z"},
+      {"alpha and lengthscale", {{"sigma", 1.0}, {"alpha", 0.3}, {"lengthscale", 2.0}}, {NULL}, NULL, {0},
+       MF_ERROR_MISSING_PARAMETER, "lengthscale"},
+      {"negative lengthscale", {{"sigma", 1.0}, {"lengthscale", -2.0}}, {NULL}, NULL, {0}, MF_ERROR_INVALID_VALUE,
+       "lengthscale"},
+      {"negative shell_extent", {{"sigma", 1.0}, {"alpha", 0.3}, {"shell_extent", -1.0}}, {NULL}, NULL, {0},
+       MF_ERROR_INVALID_VALUE, "shell_extent"},
+      {"unknown micro_bsdf", {{"sigma", 1.0}, {"alpha", 0.3}}, {"micro_bsdf", "glass", NULL}, NULL, {0},
+       MF_ERROR_INVALID_VALUE, "micro_bsdf"},
+      {"unknown material", {{"sigma", 1.0}, {"alpha", 0.3}}, {"material", "Unobtainium", NULL}, NULL, {0},
+       MF_ERROR_INVALID_VALUE, "material"},
+      {"eta without k", {{"sigma", 1.0}, {"alpha", 0.3}}, {NULL}, "eta", {0.2, 0.9, 1.1}, MF_ERROR_MISSING_PARAMETER,
+       "\"k\""},
+      {"material and eta", {{"sigma", 1.0}, {"alpha", 0.3}}, {"material", "Au", NULL}, "eta", {0.2, 0.9, 1.1},
+       MF_ERROR_MISSING_PARAMETER, "material"},
+      {"reflectance > 1", {{"sigma", 1.0}, {"alpha", 0.3}}, {"micro_bsdf", "diffuse", NULL}, "reflectance",
+       {0.5, 1.5, 0.5}, MF_ERROR_INVALID_VALUE, "reflectance"},
+      {"negative specular_reflectance", {{"sigma", 1.0}, {"alpha", 0.3}}, {NULL}, "specular_reflectance",
+       {0.5, -0.5, 0.5}, MF_ERROR_INVALID_VALUE, "specular_reflectance"},
+      {"reflectance on a conductor", {{"sigma", 1.0}, {"alpha", 0.3}}, {NULL}, "reflectance", {0.5, 0.5, 0.5},
+       MF_ERROR_UNKNOWN_PARAMETER, "reflectance"},
+      {"mixture on ggx", {{"sigma", 1.0}, {"alpha", 0.3}}, {"distribution", "ggx", "vndf_sampling", "mixture", NULL},
+       NULL, {0}, MF_ERROR_INVALID_VALUE, "mixture"},
+      {"mixture with diffuse flakes", {{"sigma", 1.0}, {"alpha", 0.3}},
+       {"micro_bsdf", "diffuse", "vndf_sampling", "mixture", NULL}, NULL, {0}, MF_ERROR_INVALID_VALUE, "mixture"},
+      {"mixture_ratio out of (0,1)", {{"sigma", 1.0}, {"alpha", 0.3}, {"mixture_ratio", 1.5}},
+       {"vndf_sampling", "mixture", NULL}, NULL, {0}, MF_ERROR_INVALID_VALUE, "mixture_ratio"},
+      {"mixture_ratio without mixture", {{"sigma", 1.0}, {"alpha", 0.3}, {"mixture_ratio", 0.5}}, {NULL}, NULL, {0},
+       MF_ERROR_UNKNOWN_PARAMETER, "mixture_ratio"},
+      {"unknown vndf_sampling", {{"sigma", 1.0}, {"alpha", 0.3}}, {"vndf_sampling", "magic", NULL}, NULL, {0},
+       MF_ERROR_INVALID_VALUE, "vndf_sampling"},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+    const bad_build *c = &cases[i];
+    mf_params *p = NULL;
+    EXPECT_OK(mf_params_new(&p));
+    for (const named_float *f = c->floats; f->name; ++f) EXPECT_OK(mf_params_set_float(p, f->name, f->value));
+    for (const char *const *s = c->strings; s[0]; s += 2) EXPECT_OK(mf_params_set_string(p, s[0], s[1]));
+    if (c->rgb_name) EXPECT_OK(mf_params_set_rgb(p, c->rgb_name, c->rgb));
+    mf_medium *sentinel = (mf_medium *)(uintptr_t)0xBADC0DE;
+    mf_medium *m = sentinel;
+    mf_status s = mf_medium_new(p, &m);
+    ++g_checks;
+    if (s != c->status || strstr(last_error(), c->needle) == NULL) {
+      ++g_failures;
+      fprintf(stderr, "mf_medium_new (%s): status %d, expected %d; message \"%s\" should mention %s\n", c->what,
+              (int)s, (int)c->status, last_error(), c->needle);
+    }
+    CHECK(m == sentinel, "%s: out_medium written on failure", c->what);
+    if (m != sentinel) mf_medium_free(m);
+    mf_params_free(p);
+  }
+
+  /* NULL handle and NULL out-pointer. */
+  mf_params *p = NULL;
+  EXPECT_OK(mf_params_new(&p));
+  EXPECT_OK(mf_params_set_float(p, "sigma", 1.0));
+  EXPECT_OK(mf_params_set_float(p, "alpha", 0.3));
+  mf_medium *sentinel = (mf_medium *)(uintptr_t)0xBADC0DE;
+  mf_medium *m = sentinel;
+  EXPECT_STATUS(mf_medium_new(NULL, &m), MF_ERROR_NULL_POINTER, "params");
+  CHECK(m == sentinel, "out_medium written on failure");
+  EXPECT_STATUS(mf_medium_new(p, NULL), MF_ERROR_NULL_POINTER, "out_medium");
+  /* The set survives failed builds and can still build a medium; setting a name again replaces
+   * its value (sigma 1 -> 0.5; default shell extent 3 gives top = 1.5). */
+  EXPECT_OK(mf_params_set_float(p, "sigma", 0.5));
+  EXPECT_OK(mf_medium_new(p, &m));
+  mf_params_free(p); /* the medium does not depend on the parameter set */
+  double top = -1.0;
+  EXPECT_OK(mf_medium_shell_top(m, &top));
+  CHECK(top == 1.5, "top = %.17g, expected 3 * 0.5", top);
+  mf_medium_free(m);
+}
+
+/* Every construction route of the parameter table builds. */
+static void test_medium_variants(void) {
+  const char *presets[] = {"none", "Ag", "Al", "Au", "Cr", "Cu"};
+  for (size_t i = 0; i < sizeof presets / sizeof presets[0]; ++i) {
+    const named_float f[] = {{"sigma", 0.1}, {"alpha", 0.2}, {NULL, 0}};
+    const char *s[] = {"material", presets[i], NULL};
+    mf_medium *m = build(f, s, NULL, NULL, NULL, NULL);
+    mf_rgb v = {-1, -1, -1};
+    EXPECT_OK(mf_phase_eval(m, &FRAME_Z, v3(0, 0, 1), v3(0, 0.6, 0.8), &v));
+    CHECK(v.r > 0 && v.g > 0 && v.b > 0, "%s: phase value %g %g %g", presets[i], v.r, v.g, v.b);
+    mf_medium_free(m);
+  }
+  const char *dists[] = {"beckmann", "ggx", "gpss"};
+  for (size_t i = 0; i < 3; ++i) {
+    const named_float f[] = {{"variance", 0.01}, {"alpha_u", 0.2}, {"alpha_v", 0.4}, {NULL, 0}};
+    const named_float fz[] = {{"variance", 0.01}, {"alpha_u", 0.2}, {"alpha_v", 0.4}, {"alpha_z", 0.0}, {NULL, 0}};
+    const char *s[] = {"distribution", dists[i], "vndf_sampling", "exact", NULL};
+    mf_medium *m = build(i == 2 ? fz : f, s, "specular_reflectance", (const double[3]){0.9, 0.8, 0.7}, NULL, NULL);
+    mf_medium_free(m);
+  }
+
+  /* Kernel form: alpha_i = sqrt(2) sigma / l_i (Eq. 4). The same medium given by alphas computed
+   * here with the same IEEE operations answers bit for bit the same. */
+  const double var = 0.04, lx = 0.5, ly = 0.7, lz = 1.3;
+  const double sigma = sqrt(var);
+  const named_float fk[] = {{"variance", var}, {"lengthscale_x", lx}, {"lengthscale_y", ly}, {"lengthscale_z", lz},
+                            {NULL, 0}};
+  const named_float fa[] = {{"sigma", sigma},
+                            {"alpha_u", SQRT2 * sigma / lx},
+                            {"alpha_v", SQRT2 * sigma / ly},
+                            {"alpha_z", SQRT2 * sigma / lz},
+                            {NULL, 0}};
+  mf_medium *mk = build(fk, (const char *[]){"material", "Cu", NULL}, NULL, NULL, NULL, NULL);
+  mf_medium *ma = build(fa, (const char *[]){"material", "Cu", NULL}, NULL, NULL, NULL, NULL);
+  mf_vec3 d = normalize(v3(0.3, -0.2, -0.9));
+  mf_vec3 wi = normalize(v3(0.1, 0.5, 0.8)), wo = normalize(v3(-0.4, 0.1, 0.6));
+  double sk = -1, sa = -2;
+  EXPECT_OK(mf_medium_sigma_t(mk, &FRAME_TILTED, 0.05, d, &sk));
+  EXPECT_OK(mf_medium_sigma_t(ma, &FRAME_TILTED, 0.05, d, &sa));
+  CHECK(sk == sa && sk > 0, "kernel form sigma_t %.17g vs alpha form %.17g", sk, sa);
+  mf_rgb pk, pa;
+  EXPECT_OK(mf_phase_eval(mk, &FRAME_TILTED, wi, wo, &pk));
+  EXPECT_OK(mf_phase_eval(ma, &FRAME_TILTED, wi, wo, &pa));
+  CHECK(same_bits(&pk, &pa, sizeof pk), "kernel form phase %.17g vs %.17g", pk.r, pa.r);
+  mf_medium_free(mk);
+  mf_medium_free(ma);
+  /* An isotropic kernel: lengthscale sets alpha_u = alpha_v = alpha_z. */
+  const named_float fi[] = {{"sigma", 0.2}, {"lengthscale", 0.5}, {NULL, 0}};
+  const named_float fi2[] = {{"sigma", 0.2}, {"alpha", SQRT2 * 0.2 / 0.5}, {NULL, 0}};
+  mf_medium *mi = build(fi, NULL, NULL, NULL, NULL, NULL);
+  mf_medium *mi2 = build(fi2, NULL, NULL, NULL, NULL, NULL);
+  EXPECT_OK(mf_medium_sigma_t(mi, &FRAME_Z, 0.0, d, &sk));
+  EXPECT_OK(mf_medium_sigma_t(mi2, &FRAME_Z, 0.0, d, &sa));
+  CHECK(sk == sa, "isotropic kernel %.17g vs alpha %.17g", sk, sa);
+  mf_medium_free(mi);
+  mf_medium_free(mi2);
+}
+
+/* sigma_t / rho == Lambda cos (Eq. 31/32), transmittance identities, Smith G1, free flights. */
+static void test_extinction_identities(void) {
+  mf_medium *m = gpss_conductor();
+  const double k = 8.0, sigma = GPSS_SIGMA;
+  double top = 0;
+  EXPECT_OK(mf_medium_shell_top(m, &top));
+  CHECK(top == k * sigma, "top %.17g", top);
+
+  struct {
+    const char *name;
+    mf_medium *m;
+    lambda_fn lambda;
+    double alpha[3];
+  } media[3];
+  media[0].name = "gpss";
+  media[0].m = m;
+  media[0].lambda = lambda_gauss_cb;
+  memcpy(media[0].alpha, GPSS_ALPHA, sizeof GPSS_ALPHA);
+  {
+    const named_float f[] = {{"sigma", sigma}, {"shell_extent", k}, {"alpha_u", 0.25}, {"alpha_v", 0.5}, {NULL, 0}};
+    media[1].name = "beckmann";
+    media[1].m = build(f, (const char *[]){"distribution", "beckmann", "material", "Cu", NULL}, NULL, NULL, NULL, NULL);
+    media[1].lambda = lambda_gauss_cb;
+    media[1].alpha[0] = 0.25, media[1].alpha[1] = 0.5, media[1].alpha[2] = 0.0;
+    media[2].name = "ggx";
+    media[2].m = build(f, (const char *[]){"distribution", "ggx", NULL}, NULL, NULL, NULL, NULL);
+    media[2].lambda = lambda_ggx_cb;
+    media[2].alpha[0] = 0.25, media[2].alpha[1] = 0.5, media[2].alpha[2] = 0.0;
+  }
+  const mf_frame *frames[2] = {&FRAME_Z, &FRAME_TILTED};
+  const double thetas[] = {0.2, 0.7, 1.1, 1.35, PI - 1.2, PI - 0.4};
+  const double phis[] = {0.0, 0.9, 2.5, 4.0};
+  const double fs[] = {-1.3, -0.4, 0.0, 0.35, 1.2};
+
+  for (int mi = 0; mi < 3; ++mi) {
+    for (int fi = 0; fi < 2; ++fi) {
+      basis b = basis_of(*frames[fi]);
+      for (size_t ti = 0; ti < sizeof thetas / sizeof thetas[0]; ++ti) {
+        for (size_t pi = 0; pi < sizeof phis / sizeof phis[0]; ++pi) {
+          mf_vec3 dl = spherical(thetas[ti], phis[pi]);
+          mf_vec3 d = to_world(b, dl);
+          double sig = projected_sigma(to_local(b, d), media[mi].lambda, media[mi].alpha);
+          for (size_t i = 0; i < sizeof fs / sizeof fs[0]; ++i) {
+            double st = -1.0;
+            EXPECT_OK(mf_medium_sigma_t(media[mi].m, frames[fi], fs[i], d, &st));
+            CHECK_REL(st / density(fs[i], sigma), sig, 1e-10);
+            /* Majorant over [f, f + 0.5]: sigma_t at the lower end bounds the segment. */
+            double maj = -1.0, st_hi = -1.0;
+            EXPECT_OK(mf_medium_majorant(media[mi].m, frames[fi], fs[i] + 0.5, fs[i], d, &maj));
+            EXPECT_OK(mf_medium_sigma_t(media[mi].m, frames[fi], fs[i] + 0.5, d, &st_hi));
+            CHECK(maj >= st && maj >= st_hi, "majorant %g < sigma_t %g / %g", maj, st, st_hi);
+
+            /* transmittance == exp(-optical depth), additivity of the optical depth. */
+            double tau = -1, tr = -1, tau1 = -1, tau2 = -1;
+            const double t1 = 0.3, t2 = 0.45;
+            EXPECT_OK(mf_medium_optical_depth(media[mi].m, frames[fi], fs[i], d, t1 + t2, &tau));
+            EXPECT_OK(mf_medium_transmittance(media[mi].m, frames[fi], fs[i], d, t1 + t2, &tr));
+            CHECK_REL(tr, exp(-tau), 1e-15);
+            EXPECT_OK(mf_medium_optical_depth(media[mi].m, frames[fi], fs[i], d, t1, &tau1));
+            double f_mid = fs[i] + t1 * dot(d, b.n);
+            EXPECT_OK(mf_medium_optical_depth(media[mi].m, frames[fi], f_mid, d, t2, &tau2));
+            CHECK_REL(tau1 + tau2, tau, 1e-12);
+            CHECK(tau > 0, "optical depth %g", tau);
+
+            if (dl.z > 0) {
+              /* Smith G1 = Phi(h/sigma)^Lambda (seeds/002 Eq. 20): upward to infinity. */
+              double g1 = -1;
+              EXPECT_OK(mf_medium_transmittance(media[mi].m, frames[fi], fs[i], d, INFINITY, &g1));
+              double lambda = media[mi].lambda(to_local(b, d), media[mi].alpha);
+              CHECK_REL(g1, pow(normal_cdf(fs[i] / sigma), lambda), 1e-10);
+            } else {
+              /* Downward to infinity: the interior is opaque. */
+              double t_inf = -1;
+              EXPECT_OK(mf_medium_transmittance(media[mi].m, frames[fi], fs[i], d, INFINITY, &t_inf));
+              CHECK(t_inf == 0.0, "downward transmittance to infinity %g", t_inf);
+            }
+          }
+        }
+      }
+    }
+  }
+  /* Above the shell, going up: nothing to meet. */
+  double t_above = -1;
+  EXPECT_OK(mf_medium_transmittance(m, &FRAME_Z, top + 0.1, v3(0, 0, 1), INFINITY, &t_above));
+  CHECK(t_above == 1.0, "transmittance above the shell %.17g", t_above);
+  double st_above = -1;
+  EXPECT_OK(mf_medium_sigma_t(m, &FRAME_Z, top + 0.1, v3(0, 0, -1), &st_above));
+  CHECK(st_above == 0.0, "sigma_t above the shell %g", st_above);
+
+  /* Free flights invert the transmittance: a collision at t has tau(t) = -ln(1 - u). */
+  for (int fi = 0; fi < 2; ++fi) {
+    basis b = basis_of(*frames[fi]);
+    const mf_vec3 dirs[] = {spherical(2.5, 0.3), spherical(1.2, 2.0), spherical(0.4, 4.0)};
+    for (size_t di = 0; di < 3; ++di) {
+      mf_vec3 d = to_world(b, dirs[di]);
+      for (int j = 0; j < 20; ++j) {
+        double u = (j + 0.5) / 20.0, f0 = 0.3;
+        mf_free_flight fl = {false, -1.0};
+        const double t_max = 4.0;
+        EXPECT_OK(mf_medium_sample_free_flight(m, frames[fi], f0, d, t_max, u, &fl));
+        double tau_max = -1;
+        EXPECT_OK(mf_medium_optical_depth(m, frames[fi], f0, d, t_max, &tau_max));
+        double target = -log1p(-u);
+        if (fl.scattered) {
+          double tau_t = -1;
+          CHECK(fl.t >= 0 && fl.t <= t_max, "t = %g outside [0, %g]", fl.t, t_max);
+          EXPECT_OK(mf_medium_optical_depth(m, frames[fi], f0, d, fl.t, &tau_t));
+          CHECK_REL(tau_t, target, 1e-9);
+        } else {
+          CHECK(fl.t == t_max, "pass with t = %g", fl.t);
+          CHECK(target >= tau_max, "passed although -ln(1-u) = %g < tau(t_max) = %g", target, tau_max);
+        }
+      }
+    }
+  }
+  mf_medium_free(media[1].m);
+  mf_medium_free(media[2].m);
+  mf_medium_free(m);
+}
+
+/* Checks sampled directions against eval/pdf for one medium. With `spec` non-NULL the weight must
+ * also equal the flake reflectance: Fresnel(eta, k) (or 1 when eta is NULL) times spec; that holds
+ * for exact vNDF sampling only (the Eq. 40 mixture weights by D_wi / pdf as well). */
+static void check_phase_sampling(const char *name, mf_medium *m, const mf_frame *frame, const double *eta,
+                                 const double *k, const double *spec, int diffuse_albedo, const double *albedo) {
+  basis b = basis_of(*frame);
+  int valid = 0;
+  for (int i = 0; i < 200; ++i) {
+    mf_vec3 wi = to_world(b, spherical(acos(1.0 - 1.9 * uniform01()), 2.0 * PI * uniform01()));
+    double u[MF_PHASE_SAMPLE_DIMENSIONS];
+    for (int j = 0; j < MF_PHASE_SAMPLE_DIMENSIONS; ++j) u[j] = uniform01();
+    phase_sample_t s;
+    memset(&s, 0xA5, sizeof s);
+    EXPECT_OK(mf_phase_sample(m, frame, wi, u, &s));
+    if (!s.valid) {
+      CHECK(s.pdf == 0 && s.weight.r == 0 && s.wo.x == 0 && s.wo.y == 0 && s.wo.z == 0,
+            "%s: invalid sample with non-zero fields", name);
+      continue;
+    }
+    ++valid;
+    CHECK(fabs(dot(s.wo, s.wo) - 1.0) < 1e-12, "%s: |wo| = %.17g", name, sqrt(dot(s.wo, s.wo)));
+    CHECK(s.pdf > 0 && isfinite(s.pdf), "%s: pdf %g", name, s.pdf);
+    double pdf = -1;
+    mf_rgb v = {-1, -1, -1};
+    EXPECT_OK(mf_phase_pdf(m, frame, wi, s.wo, &pdf));
+    EXPECT_OK(mf_phase_eval(m, frame, wi, s.wo, &v));
+    CHECK(pdf > 0, "%s: pdf(wi, sampled wo) = %g", name, pdf);
+    CHECK_REL(pdf, s.pdf, 1e-9);
+    if (diffuse_albedo) {
+      /* Exact: vNDF normal + cosine lobe reproduce p / albedo, so the weight is the albedo;
+       * eval = albedo * pdf with the same quadrature. */
+      CHECK(s.weight.r == albedo[0] && s.weight.g == albedo[1] && s.weight.b == albedo[2], "%s: weight %g %g %g",
+            name, s.weight.r, s.weight.g, s.weight.b);
+      CHECK(v.r == albedo[0] * pdf && v.g == albedo[1] * pdf && v.b == albedo[2] * pdf, "%s: eval != albedo * pdf",
+            name);
+      continue;
+    }
+    CHECK_REL(s.weight.r, v.r / pdf, 1e-9);
+    CHECK_REL(s.weight.g, v.g / pdf, 1e-9);
+    CHECK_REL(s.weight.b, v.b / pdf, 1e-9);
+    if (spec == NULL) continue;
+    mf_vec3 h = normalize(add(wi, s.wo));
+    double c = dot(wi, h);
+    const double *ch[3] = {&s.weight.r, &s.weight.g, &s.weight.b};
+    for (int cc = 0; cc < 3; ++cc) {
+      double fr = eta ? fresnel_conductor(c, eta[cc], k[cc]) : 1.0;
+      CHECK_REL(*ch[cc], fr * spec[cc], 1e-10);
+    }
+  }
+  CHECK(valid > 150, "%s: only %d of 200 samples valid", name, valid);
+}
+
+static void test_phase(void) {
+  mf_medium *m = gpss_conductor();
+  const double one[3] = {1, 1, 1};
+  /* Projected-area-weighted symmetry of the specular phase function. */
+  for (int i = 0; i < 100; ++i) {
+    const mf_frame *frame = (i & 1) ? &FRAME_TILTED : &FRAME_Z;
+    basis b = basis_of(*frame);
+    mf_vec3 wi = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
+    mf_vec3 wo = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
+    mf_rgb p_io, p_oi;
+    double a_i = -1, a_o = -1;
+    EXPECT_OK(mf_phase_eval(m, frame, wi, wo, &p_io));
+    EXPECT_OK(mf_phase_eval(m, frame, wo, wi, &p_oi));
+    EXPECT_OK(mf_medium_sigma_t(m, frame, 0.0, scale(wi, -1.0), &a_i));
+    EXPECT_OK(mf_medium_sigma_t(m, frame, 0.0, scale(wo, -1.0), &a_o));
+    CHECK(p_io.r >= 0 && p_io.g >= 0 && p_io.b >= 0, "negative phase value");
+    CHECK_REL(p_io.r * a_i, p_oi.r * a_o, 1e-12);
+    CHECK_REL(p_io.b * a_i, p_oi.b * a_o, 1e-12);
+  }
+  /* Back-to-back directions: no half vector, zero value and density. */
+  mf_rgb zero = {-1, -1, -1};
+  double zpdf = -1;
+  EXPECT_OK(mf_phase_eval(m, &FRAME_Z, v3(0, 0.6, 0.8), v3(0, -0.6, -0.8), &zero));
+  EXPECT_OK(mf_phase_pdf(m, &FRAME_Z, v3(0, 0.6, 0.8), v3(0, -0.6, -0.8), &zpdf));
+  CHECK(zero.r == 0 && zero.g == 0 && zero.b == 0 && zpdf == 0, "back-to-back: %g %g", zero.r, zpdf);
+
+  check_phase_sampling("gpss conductor", m, &FRAME_TILTED, COND_ETA, COND_K, one, 0, NULL);
+  check_phase_sampling("gpss conductor (z frame)", m, &FRAME_Z, COND_ETA, COND_K, one, 0, NULL);
+  mf_medium_free(m);
+
+  const double spec[3] = {0.9, 0.7, 0.5};
+  {
+    const named_float f[] = {{"sigma", 0.2}, {"alpha_u", 0.4}, {"alpha_v", 0.3}, {NULL, 0}};
+    mf_medium *mm = build(f, (const char *[]){"distribution", "ggx", "material", "none", NULL}, "specular_reflectance",
+                          spec, NULL, NULL);
+    check_phase_sampling("ggx mirror", mm, &FRAME_TILTED, NULL, NULL, spec, 0, NULL);
+    mf_medium_free(mm);
+  }
+  {
+    const named_float f[] = {{"sigma", 0.2}, {"alpha", 0.5}, {NULL, 0}};
+    mf_medium *mm = build(f, (const char *[]){"distribution", "beckmann", "material", "none", NULL}, NULL, NULL, NULL,
+                          NULL);
+    check_phase_sampling("beckmann mirror", mm, &FRAME_Z, NULL, NULL, one, 0, NULL);
+    /* Mirror flakes of reflectance 1: every sample has weight exactly 1. */
+    double u[5] = {0.1, 0.2, 0.3, 0.4, 0.5};
+    phase_sample_t s;
+    EXPECT_OK(mf_phase_sample(mm, &FRAME_Z, v3(0.6, 0, 0.8), u, &s));
+    CHECK(s.valid && s.weight.r == 1.0 && s.weight.g == 1.0 && s.weight.b == 1.0, "mirror weight %.17g", s.weight.r);
+    /* A height field seen from straight below shows no flake: a valid call, no sample. */
+    memset(&s, 0xA5, sizeof s);
+    EXPECT_OK(mf_phase_sample(mm, &FRAME_Z, v3(0, 0, -1), u, &s));
+    CHECK(!s.valid && s.pdf == 0 && s.wo.x == 0 && s.wo.y == 0 && s.wo.z == 0 && s.weight.r == 0 &&
+              s.weight.g == 0 && s.weight.b == 0,
+          "sample from below a height field: valid %d pdf %g", (int)s.valid, s.pdf);
+    mf_medium_free(mm);
+  }
+  {
+    const named_float f[] = {{"sigma", 0.2}, {"alpha_u", 0.3}, {"alpha_v", 0.5}, {"alpha_z", 0.6},
+                             {"mixture_ratio", 0.3}, {NULL, 0}};
+    mf_medium *mm = build(f, (const char *[]){"vndf_sampling", "mixture", "material", "Ag", NULL}, NULL, NULL, NULL,
+                          NULL);
+    check_phase_sampling("gpss mixture (Ag)", mm, &FRAME_TILTED, NULL, NULL, NULL, 0, NULL);
+    mf_medium_free(mm);
+  }
+  {
+    /* The "Au" preset reaches the flakes: its (eta, k) (src/fresnel.rs, Palik) give the weights. */
+    const named_float f[] = {{"sigma", 0.2}, {"alpha", 0.3}, {NULL, 0}};
+    mf_medium *mm = build(f, (const char *[]){"distribution", "beckmann", "material", "Au", NULL}, NULL, NULL, NULL,
+                          NULL);
+    const double au_eta[3] = {0.143119, 0.374957, 1.442479}, au_k[3] = {3.983160, 2.385721, 1.603215};
+    check_phase_sampling("beckmann Au", mm, &FRAME_TILTED, au_eta, au_k, one, 0, NULL);
+    mf_medium_free(mm);
+  }
+  {
+    const double albedo[3] = {0.2, 0.5, 0.8};
+    const named_float f[] = {{"sigma", 0.2}, {"alpha", 0.5}, {NULL, 0}};
+    mf_medium *mm = build(f, (const char *[]){"micro_bsdf", "diffuse", NULL}, "reflectance", albedo, NULL, NULL);
+    check_phase_sampling("gpss diffuse", mm, &FRAME_TILTED, NULL, NULL, NULL, 1, albedo);
+    mf_medium_free(mm);
+  }
+}
+
+/* Values printed once from the Rust core (medium_from_params + core methods) for the same
+ * inputs; tolerance 1e-12 relative (see the top comment). */
+static void test_reference_values(void) {
+  mf_medium *m = gpss_conductor();
+  const double s = 1.0 / sqrt(3.0);
+  const mf_vec3 d = v3(s, -s, s), dn = v3(s, -s, -s), wi = v3(0, 0.6, 0.8), wo = v3(-0.6, 0, 0.8);
+  double x = -1;
+  EXPECT_OK(mf_medium_sigma_t(m, &FRAME_Z, 0.1, d, &x));
+  CHECK_REL(x, 5.981797510962255e-3, 1e-12);
+  EXPECT_OK(mf_medium_majorant(m, &FRAME_Z, 0.3, -0.4, d, &x));
+  CHECK_REL(x, 1.2116498973963784e-2, 1e-12);
+  EXPECT_OK(mf_medium_optical_depth(m, &FRAME_Z, -0.2, d, 1.5, &x));
+  CHECK_REL(x, 7.440225196802669e-3, 1e-12);
+  EXPECT_OK(mf_medium_transmittance(m, &FRAME_Z, -0.2, d, 1.5, &x));
+  CHECK_REL(x, 9.925873847614832e-1, 1e-12);
+  EXPECT_OK(mf_medium_optical_depth(m, &FRAME_Z, 0.7, v3(0.6, 0.0, -0.8), 2.0, &x));
+  CHECK_REL(x, 3.242270009714714e0, 1e-12);
+  mf_free_flight fl = {false, -1};
+  EXPECT_OK(mf_medium_sample_free_flight(m, &FRAME_Z, 0.2, dn, INFINITY, 0.3, &fl));
+  CHECK(fl.scattered, "reference free flight passed");
+  CHECK_REL(fl.t, 4.332942818040923e-1, 1e-12);
+  mf_rgb v;
+  double pdf = -1;
+  EXPECT_OK(mf_phase_eval(m, &FRAME_Z, wi, wo, &v));
+  EXPECT_OK(mf_phase_pdf(m, &FRAME_Z, wi, wo, &pdf));
+  CHECK_REL(v.r, 9.884436111959852e-2, 1e-12);
+  CHECK_REL(v.g, 6.394362550981128e-2, 1e-12);
+  CHECK_REL(v.b, 5.2078595740960874e-2, 1e-12);
+  CHECK_REL(pdf, 1.0385263524433613e-1, 1e-12);
+  const double u[5] = {0.25, 0.5, 0.75, 0.1, 0.9};
+  phase_sample_t ps;
+  EXPECT_OK(mf_phase_sample(m, &FRAME_Z, wi, u, &ps));
+  CHECK(ps.valid, "reference sample invalid");
+  CHECK_ABS(ps.wo.x, -4.115664662817114e-17, 1e-13);
+  CHECK_ABS(ps.wo.y, -9.587983171762288e-1, 1e-13);
+  CHECK_ABS(ps.wo.z, 2.840876396114976e-1, 1e-13);
+  CHECK_REL(ps.weight.r, 9.475709523203734e-1, 1e-12);
+  CHECK_REL(ps.weight.g, 6.193517134068397e-1, 1e-12);
+  CHECK_REL(ps.weight.b, 5.154128633478088e-1, 1e-12);
+  CHECK_REL(ps.pdf, 5.387096537488444e-1, 1e-12);
+  mf_medium_free(m);
+
+  const named_float fg[] = {{"sigma", 0.25}, {"alpha", 0.35}, {NULL, 0}};
+  mf_medium *g = build(fg, (const char *[]){"distribution", "ggx", "material", "Au", NULL}, NULL, NULL, NULL, NULL);
+  EXPECT_OK(mf_medium_sigma_t(g, &FRAME_Z, -0.1, d, &x));
+  CHECK_REL(x, 1.4290267624592112e-1, 1e-12);
+  EXPECT_OK(mf_phase_eval(g, &FRAME_Z, wi, wo, &v));
+  EXPECT_OK(mf_phase_pdf(g, &FRAME_Z, wi, wo, &pdf));
+  CHECK_REL(v.r, 1.1662763670135153e-1, 1e-12);
+  CHECK_REL(v.g, 9.677246511327317e-2, 1e-12);
+  CHECK_REL(v.b, 3.9220077584375096e-2, 1e-12);
+  CHECK_REL(pdf, 1.2066567854219414e-1, 1e-12);
+  mf_medium_free(g);
+
+  const named_float fd[] = {{"variance", 0.04}, {"lengthscale", 0.5}, {NULL, 0}};
+  mf_medium *df = build(fd, (const char *[]){"micro_bsdf", "diffuse", NULL}, "reflectance",
+                        (const double[3]){0.2, 0.5, 0.8}, NULL, NULL);
+  EXPECT_OK(mf_phase_eval(df, &FRAME_Z, wi, wo, &v));
+  EXPECT_OK(mf_phase_pdf(df, &FRAME_Z, wi, wo, &pdf));
+  CHECK_REL(v.r, 4.501685894894002e-2, 1e-12);
+  CHECK_REL(v.g, 1.1254214737235003e-1, 1e-12);
+  CHECK_REL(v.b, 1.8006743579576007e-1, 1e-12);
+  CHECK_REL(pdf, 2.2508429474470007e-1, 1e-12);
+  mf_medium_free(df);
+}
+
+/* Batch calls equal single calls bit for bit; batch errors name the index and write nothing. */
+#define NB 64
+static void test_batches(void) {
+  mf_medium *m = gpss_conductor();
+  mf_flight_query fq[NB];
+  mf_phase_query pq[NB];
+  mf_phase_sample_query sq[NB];
+  for (int i = 0; i < NB; ++i) {
+    const mf_frame *frame = (i % 3) ? &FRAME_TILTED : &FRAME_Z;
+    basis b = basis_of(*frame);
+    fq[i].frame = *frame;
+    fq[i].f = -1.5 + 3.5 * uniform01();
+    fq[i].d = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
+    fq[i].t_max = (i % 5 == 0) ? INFINITY : 3.0 * uniform01();
+    fq[i].u = uniform01();
+    pq[i].frame = *frame;
+    pq[i].wi = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
+    pq[i].wo = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
+    sq[i].frame = *frame;
+    sq[i].wi = pq[i].wi;
+    for (int j = 0; j < MF_PHASE_SAMPLE_DIMENSIONS; ++j) sq[i].u[j] = uniform01();
+  }
+  double tr[NB];
+  mf_free_flight ff[NB];
+  mf_phase_value pv[NB];
+  phase_sample_t ps[NB];
+  EXPECT_OK(mf_medium_transmittance_batch(m, fq, NB, tr));
+  EXPECT_OK(mf_medium_sample_free_flight_batch(m, fq, NB, ff));
+  EXPECT_OK(mf_phase_eval_batch(m, pq, NB, pv));
+  EXPECT_OK(mf_phase_sample_batch(m, sq, NB, ps));
+  int scattered = 0;
+  for (int i = 0; i < NB; ++i) {
+    double t1 = -1;
+    EXPECT_OK(mf_medium_transmittance(m, &fq[i].frame, fq[i].f, fq[i].d, fq[i].t_max, &t1));
+    CHECK(same_bits(&t1, &tr[i], sizeof t1), "transmittance batch[%d] %.17g vs %.17g", i, tr[i], t1);
+    mf_free_flight f1;
+    EXPECT_OK(mf_medium_sample_free_flight(m, &fq[i].frame, fq[i].f, fq[i].d, fq[i].t_max, fq[i].u, &f1));
+    CHECK(f1.scattered == ff[i].scattered && same_bits(&f1.t, &ff[i].t, sizeof f1.t), "free flight batch[%d]", i);
+    scattered += f1.scattered;
+    mf_rgb v1;
+    double p1;
+    EXPECT_OK(mf_phase_eval(m, &pq[i].frame, pq[i].wi, pq[i].wo, &v1));
+    EXPECT_OK(mf_phase_pdf(m, &pq[i].frame, pq[i].wi, pq[i].wo, &p1));
+    CHECK(same_bits(&v1, &pv[i].value, sizeof v1) && same_bits(&p1, &pv[i].pdf, sizeof p1), "phase eval batch[%d]", i);
+    phase_sample_t s1;
+    EXPECT_OK(mf_phase_sample(m, &sq[i].frame, sq[i].wi, sq[i].u, &s1));
+    CHECK(s1.valid == ps[i].valid && same_bits(&s1.wo, &ps[i].wo, sizeof s1.wo) &&
+              same_bits(&s1.weight, &ps[i].weight, sizeof s1.weight) && same_bits(&s1.pdf, &ps[i].pdf, sizeof s1.pdf),
+          "phase sample batch[%d]", i);
+  }
+  CHECK(scattered > 5 && scattered < NB, "free flights: %d of %d scattered (both outcomes expected)", scattered, NB);
+
+  /* count 0: NULL arrays are fine; the medium is still required. */
+  EXPECT_OK(mf_medium_transmittance_batch(m, NULL, 0, NULL));
+  EXPECT_OK(mf_medium_sample_free_flight_batch(m, NULL, 0, NULL));
+  EXPECT_OK(mf_phase_eval_batch(m, NULL, 0, NULL));
+  EXPECT_OK(mf_phase_sample_batch(m, NULL, 0, NULL));
+  EXPECT_STATUS(mf_medium_transmittance_batch(NULL, NULL, 0, NULL), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_medium_sample_free_flight_batch(NULL, NULL, 0, NULL), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_phase_eval_batch(NULL, NULL, 0, NULL), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_phase_sample_batch(NULL, NULL, 0, NULL), MF_ERROR_NULL_POINTER, "medium");
+
+  /* NULL arrays with count > 0. */
+  EXPECT_STATUS(mf_medium_transmittance_batch(m, NULL, NB, tr), MF_ERROR_NULL_POINTER, "queries");
+  EXPECT_STATUS(mf_medium_transmittance_batch(m, fq, NB, NULL), MF_ERROR_NULL_POINTER, "out");
+  EXPECT_STATUS(mf_medium_sample_free_flight_batch(m, NULL, NB, ff), MF_ERROR_NULL_POINTER, "queries");
+  EXPECT_STATUS(mf_medium_sample_free_flight_batch(m, fq, NB, NULL), MF_ERROR_NULL_POINTER, "out");
+  EXPECT_STATUS(mf_phase_eval_batch(m, NULL, NB, pv), MF_ERROR_NULL_POINTER, "queries");
+  EXPECT_STATUS(mf_phase_eval_batch(m, pq, NB, NULL), MF_ERROR_NULL_POINTER, "out");
+  EXPECT_STATUS(mf_phase_sample_batch(m, NULL, NB, ps), MF_ERROR_NULL_POINTER, "queries");
+  EXPECT_STATUS(mf_phase_sample_batch(m, sq, NB, NULL), MF_ERROR_NULL_POINTER, "out");
+
+  /* One bad query in the middle: status, its index in the message, nothing written. */
+  unsigned char fill[sizeof ps];
+  memset(fill, 0xA5, sizeof fill);
+  mf_flight_query fq_bad[NB];
+  memcpy(fq_bad, fq, sizeof fq);
+  fq_bad[37].d = v3(NAN, 0, 1);
+  memset(tr, 0xA5, sizeof tr);
+  EXPECT_STATUS(mf_medium_transmittance_batch(m, fq_bad, NB, tr), MF_ERROR_INVALID_ARGUMENT, "query 37: d");
+  CHECK(same_bits(tr, fill, sizeof tr), "transmittance batch wrote output on failure");
+  memcpy(fq_bad, fq, sizeof fq);
+  fq_bad[12].u = 1.0;
+  memset(ff, 0xA5, sizeof ff);
+  EXPECT_STATUS(mf_medium_sample_free_flight_batch(m, fq_bad, NB, ff), MF_ERROR_INVALID_ARGUMENT, "query 12: u");
+  CHECK(same_bits(ff, fill, sizeof ff), "free-flight batch wrote output on failure");
+  memcpy(fq_bad, fq, sizeof fq);
+  fq_bad[NB - 1].t_max = -1.0;
+  memset(ff, 0xA5, sizeof ff);
+  EXPECT_STATUS(mf_medium_sample_free_flight_batch(m, fq_bad, NB, ff), MF_ERROR_INVALID_ARGUMENT, "query 63");
+  CHECK(same_bits(ff, fill, sizeof ff), "free-flight batch wrote output on failure");
+  mf_phase_query pq_bad[NB];
+  memcpy(pq_bad, pq, sizeof pq);
+  pq_bad[0].wo = v3(1, 1, 0);
+  memset(pv, 0xA5, sizeof pv);
+  EXPECT_STATUS(mf_phase_eval_batch(m, pq_bad, NB, pv), MF_ERROR_INVALID_ARGUMENT, "query 0: wo must be a unit");
+  CHECK(same_bits(pv, fill, sizeof pv), "phase eval batch wrote output on failure");
+  mf_phase_sample_query sq_bad[NB];
+  memcpy(sq_bad, sq, sizeof sq);
+  sq_bad[5].u[4] = -0.25;
+  memset(ps, 0xA5, sizeof ps);
+  EXPECT_STATUS(mf_phase_sample_batch(m, sq_bad, NB, ps), MF_ERROR_INVALID_ARGUMENT, "query 5: u[4]");
+  CHECK(same_bits(ps, fill, sizeof ps), "phase sample batch wrote output on failure");
+  memcpy(sq_bad, sq, sizeof sq);
+  sq_bad[9].frame.normal = v3(0, 0, 0);
+  memset(ps, 0xA5, sizeof ps);
+  EXPECT_STATUS(mf_phase_sample_batch(m, sq_bad, NB, ps), MF_ERROR_INVALID_ARGUMENT, "query 9: the normal");
+  CHECK(same_bits(ps, fill, sizeof ps), "phase sample batch wrote output on failure");
+  mf_medium_free(m);
+}
+
+/* Every query entry point with every kind of bad argument: exact status, a message naming the
+ * problem, out-parameter untouched. */
+static void test_bad_query_arguments(void) {
+  mf_medium *m = gpss_conductor();
+  const mf_frame *fr = &FRAME_TILTED;
+  const mf_vec3 good = normalize(v3(0.2, -0.3, 0.9));
+  const mf_vec3 nan_dir = v3(NAN, 0.0, 1.0), inf_dir = v3(0.0, INFINITY, 0.0), long_dir = v3(1.0, 1.0, 0.0),
+                zero_dir = v3(0, 0, 0);
+  const mf_frame zero_normal = {{0, 0, 0}, {1, 0, 0}}, nan_normal = {{0, NAN, 1}, {1, 0, 0}},
+                 inf_tangent = {{0, 0, 1}, {INFINITY, 0, 0}};
+  const double sentinel = -12345.678;
+  double x;
+  mf_rgb rgb;
+  mf_free_flight fl;
+  phase_sample_t ps;
+  const mf_rgb rgb_sentinel = {sentinel, sentinel, sentinel};
+  const double u5[5] = {0.1, 0.2, 0.3, 0.4, 0.5};
+
+#define DOUBLE_CASE(call, status, needle)                                  \
+  do {                                                                     \
+    x = sentinel;                                                          \
+    EXPECT_STATUS(call, status, needle);                                   \
+    CHECK(x == sentinel, "%s wrote its out-parameter on failure", #call); \
+  } while (0)
+
+  /* mf_medium_shell_top */
+  DOUBLE_CASE(mf_medium_shell_top(NULL, &x), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_medium_shell_top(m, NULL), MF_ERROR_NULL_POINTER, "out_top");
+
+  /* mf_medium_sigma_t */
+  DOUBLE_CASE(mf_medium_sigma_t(NULL, fr, 0.0, good, &x), MF_ERROR_NULL_POINTER, "medium");
+  DOUBLE_CASE(mf_medium_sigma_t(m, NULL, 0.0, good, &x), MF_ERROR_NULL_POINTER, "frame");
+  EXPECT_STATUS(mf_medium_sigma_t(m, fr, 0.0, good, NULL), MF_ERROR_NULL_POINTER, "out_sigma_t");
+  DOUBLE_CASE(mf_medium_sigma_t(m, fr, 0.0, nan_dir, &x), MF_ERROR_INVALID_ARGUMENT, "d must be finite");
+  DOUBLE_CASE(mf_medium_sigma_t(m, fr, 0.0, inf_dir, &x), MF_ERROR_INVALID_ARGUMENT, "d must be finite");
+  DOUBLE_CASE(mf_medium_sigma_t(m, fr, 0.0, long_dir, &x), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+  DOUBLE_CASE(mf_medium_sigma_t(m, fr, 0.0, zero_dir, &x), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+  DOUBLE_CASE(mf_medium_sigma_t(m, fr, NAN, good, &x), MF_ERROR_INVALID_ARGUMENT, "f must be finite");
+  DOUBLE_CASE(mf_medium_sigma_t(m, fr, -INFINITY, good, &x), MF_ERROR_INVALID_ARGUMENT, "f must be finite");
+  DOUBLE_CASE(mf_medium_sigma_t(m, &zero_normal, 0.0, good, &x), MF_ERROR_INVALID_ARGUMENT, "normal");
+  DOUBLE_CASE(mf_medium_sigma_t(m, &nan_normal, 0.0, good, &x), MF_ERROR_INVALID_ARGUMENT, "normal must be finite");
+  DOUBLE_CASE(mf_medium_sigma_t(m, &inf_tangent, 0.0, good, &x), MF_ERROR_INVALID_ARGUMENT, "tangent must be finite");
+  /* A direction within the documented 1e-6 of unit length is accepted. */
+  x = sentinel;
+  EXPECT_OK(mf_medium_sigma_t(m, fr, 0.0, scale(good, 1.0 + 5e-7), &x));
+  CHECK(x != sentinel && x > 0, "sigma_t of a nearly unit direction %g", x);
+
+  /* mf_medium_majorant */
+  DOUBLE_CASE(mf_medium_majorant(NULL, fr, 0.0, 1.0, good, &x), MF_ERROR_NULL_POINTER, "medium");
+  DOUBLE_CASE(mf_medium_majorant(m, NULL, 0.0, 1.0, good, &x), MF_ERROR_NULL_POINTER, "frame");
+  EXPECT_STATUS(mf_medium_majorant(m, fr, 0.0, 1.0, good, NULL), MF_ERROR_NULL_POINTER, "out_majorant");
+  DOUBLE_CASE(mf_medium_majorant(m, fr, NAN, 1.0, good, &x), MF_ERROR_INVALID_ARGUMENT, "f_a must be finite");
+  DOUBLE_CASE(mf_medium_majorant(m, fr, 0.0, INFINITY, good, &x), MF_ERROR_INVALID_ARGUMENT, "f_b must be finite");
+  DOUBLE_CASE(mf_medium_majorant(m, fr, 0.0, 1.0, nan_dir, &x), MF_ERROR_INVALID_ARGUMENT, "d must be finite");
+  DOUBLE_CASE(mf_medium_majorant(m, fr, 0.0, 1.0, long_dir, &x), MF_ERROR_INVALID_ARGUMENT, "unit vector");
+  DOUBLE_CASE(mf_medium_majorant(m, &zero_normal, 0.0, 1.0, good, &x), MF_ERROR_INVALID_ARGUMENT, "normal");
+
+  /* mf_medium_optical_depth and mf_medium_transmittance (same arguments). The length check
+   * names the argument "t_max" in both (see the report: these functions call it `t`). */
+  for (int which = 0; which < 2; ++which) {
+    typedef mf_status (*depth_fn)(const mf_medium *, const mf_frame *, double, mf_vec3, double, double *);
+    depth_fn fn = which ? mf_medium_transmittance : mf_medium_optical_depth;
+    const char *out_name = which ? "out_transmittance" : "out_tau";
+    DOUBLE_CASE(fn(NULL, fr, 0.0, good, 1.0, &x), MF_ERROR_NULL_POINTER, "medium");
+    DOUBLE_CASE(fn(m, NULL, 0.0, good, 1.0, &x), MF_ERROR_NULL_POINTER, "frame");
+    EXPECT_STATUS(fn(m, fr, 0.0, good, 1.0, NULL), MF_ERROR_NULL_POINTER, out_name);
+    DOUBLE_CASE(fn(m, fr, 0.0, nan_dir, 1.0, &x), MF_ERROR_INVALID_ARGUMENT, "d must be finite");
+    DOUBLE_CASE(fn(m, fr, 0.0, long_dir, 1.0, &x), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+    DOUBLE_CASE(fn(m, fr, NAN, good, 1.0, &x), MF_ERROR_INVALID_ARGUMENT, "f must be finite");
+    DOUBLE_CASE(fn(m, fr, 0.0, good, -1.0, &x), MF_ERROR_INVALID_ARGUMENT, "must be >= 0");
+    DOUBLE_CASE(fn(m, fr, 0.0, good, -INFINITY, &x), MF_ERROR_INVALID_ARGUMENT, "must be >= 0");
+    DOUBLE_CASE(fn(m, fr, 0.0, good, NAN, &x), MF_ERROR_INVALID_ARGUMENT, "must be >= 0");
+    DOUBLE_CASE(fn(m, &nan_normal, 0.0, good, 1.0, &x), MF_ERROR_INVALID_ARGUMENT, "normal");
+    /* Boundary values that are valid: t = 0 and t = +inf. */
+    x = sentinel;
+    EXPECT_OK(fn(m, fr, 0.0, good, 0.0, &x));
+    CHECK(x == (which ? 1.0 : 0.0), "zero-length segment: %g", x);
+  }
+
+  /* mf_medium_sample_free_flight */
+#define FLIGHT_CASE(call, status, needle)                                                  \
+  do {                                                                                     \
+    memset(&fl, 0xA5, sizeof fl);                                                          \
+    unsigned char before[sizeof fl];                                                       \
+    memcpy(before, &fl, sizeof fl);                                                        \
+    EXPECT_STATUS(call, status, needle);                                                   \
+    CHECK(same_bits(before, &fl, sizeof fl), "%s wrote its out-parameter on failure", #call); \
+  } while (0)
+  FLIGHT_CASE(mf_medium_sample_free_flight(NULL, fr, 0.0, good, 1.0, 0.5, &fl), MF_ERROR_NULL_POINTER, "medium");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, NULL, 0.0, good, 1.0, 0.5, &fl), MF_ERROR_NULL_POINTER, "frame");
+  EXPECT_STATUS(mf_medium_sample_free_flight(m, fr, 0.0, good, 1.0, 0.5, NULL), MF_ERROR_NULL_POINTER, "out_flight");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, fr, 0.0, nan_dir, 1.0, 0.5, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "d must be finite");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, fr, 0.0, long_dir, 1.0, 0.5, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "d must be a unit vector");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, fr, NAN, good, 1.0, 0.5, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "f must be finite");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, fr, 0.0, good, -1.0, 0.5, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "t_max must be >= 0");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, fr, 0.0, good, 1.0, 1.0, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "u must lie in [0, 1)");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, fr, 0.0, good, 1.0, -0.1, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "u must lie in [0, 1)");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, fr, 0.0, good, 1.0, NAN, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "u must lie in [0, 1)");
+  FLIGHT_CASE(mf_medium_sample_free_flight(m, &zero_normal, 0.0, good, 1.0, 0.5, &fl), MF_ERROR_INVALID_ARGUMENT,
+              "normal");
+
+  /* mf_phase_eval and mf_phase_pdf */
+#define RGB_CASE(call, status, needle)                                                  \
+  do {                                                                                  \
+    rgb = rgb_sentinel;                                                                 \
+    EXPECT_STATUS(call, status, needle);                                                \
+    CHECK(same_bits(&rgb, &rgb_sentinel, sizeof rgb), "%s wrote its out-parameter", #call); \
+  } while (0)
+  RGB_CASE(mf_phase_eval(NULL, fr, good, good, &rgb), MF_ERROR_NULL_POINTER, "medium");
+  RGB_CASE(mf_phase_eval(m, NULL, good, good, &rgb), MF_ERROR_NULL_POINTER, "frame");
+  EXPECT_STATUS(mf_phase_eval(m, fr, good, good, NULL), MF_ERROR_NULL_POINTER, "out_value");
+  RGB_CASE(mf_phase_eval(m, fr, nan_dir, good, &rgb), MF_ERROR_INVALID_ARGUMENT, "wi must be finite");
+  RGB_CASE(mf_phase_eval(m, fr, good, nan_dir, &rgb), MF_ERROR_INVALID_ARGUMENT, "wo must be finite");
+  RGB_CASE(mf_phase_eval(m, fr, long_dir, good, &rgb), MF_ERROR_INVALID_ARGUMENT, "wi must be a unit vector");
+  RGB_CASE(mf_phase_eval(m, fr, good, long_dir, &rgb), MF_ERROR_INVALID_ARGUMENT, "wo must be a unit vector");
+  RGB_CASE(mf_phase_eval(m, &nan_normal, good, good, &rgb), MF_ERROR_INVALID_ARGUMENT, "normal");
+  DOUBLE_CASE(mf_phase_pdf(NULL, fr, good, good, &x), MF_ERROR_NULL_POINTER, "medium");
+  DOUBLE_CASE(mf_phase_pdf(m, NULL, good, good, &x), MF_ERROR_NULL_POINTER, "frame");
+  EXPECT_STATUS(mf_phase_pdf(m, fr, good, good, NULL), MF_ERROR_NULL_POINTER, "out_pdf");
+  DOUBLE_CASE(mf_phase_pdf(m, fr, nan_dir, good, &x), MF_ERROR_INVALID_ARGUMENT, "wi must be finite");
+  DOUBLE_CASE(mf_phase_pdf(m, fr, good, inf_dir, &x), MF_ERROR_INVALID_ARGUMENT, "wo must be finite");
+  DOUBLE_CASE(mf_phase_pdf(m, fr, zero_dir, good, &x), MF_ERROR_INVALID_ARGUMENT, "wi must be a unit vector");
+  DOUBLE_CASE(mf_phase_pdf(m, fr, good, long_dir, &x), MF_ERROR_INVALID_ARGUMENT, "wo must be a unit vector");
+  DOUBLE_CASE(mf_phase_pdf(m, &zero_normal, good, good, &x), MF_ERROR_INVALID_ARGUMENT, "normal");
+
+  /* mf_phase_sample */
+#define SAMPLE_CASE(call, status, needle)                                                  \
+  do {                                                                                     \
+    memset(&ps, 0xA5, sizeof ps);                                                          \
+    unsigned char before[sizeof ps];                                                       \
+    memcpy(before, &ps, sizeof ps);                                                        \
+    EXPECT_STATUS(call, status, needle);                                                   \
+    CHECK(same_bits(before, &ps, sizeof ps), "%s wrote its out-parameter on failure", #call); \
+  } while (0)
+  SAMPLE_CASE(mf_phase_sample(NULL, fr, good, u5, &ps), MF_ERROR_NULL_POINTER, "medium");
+  SAMPLE_CASE(mf_phase_sample(m, NULL, good, u5, &ps), MF_ERROR_NULL_POINTER, "frame");
+  SAMPLE_CASE(mf_phase_sample(m, fr, good, NULL, &ps), MF_ERROR_NULL_POINTER, "u must not be NULL");
+  EXPECT_STATUS(mf_phase_sample(m, fr, good, u5, NULL), MF_ERROR_NULL_POINTER, "out_sample");
+  SAMPLE_CASE(mf_phase_sample(m, fr, nan_dir, u5, &ps), MF_ERROR_INVALID_ARGUMENT, "wi must be finite");
+  SAMPLE_CASE(mf_phase_sample(m, fr, long_dir, u5, &ps), MF_ERROR_INVALID_ARGUMENT, "wi must be a unit vector");
+  SAMPLE_CASE(mf_phase_sample(m, &zero_normal, good, u5, &ps), MF_ERROR_INVALID_ARGUMENT, "normal");
+  for (int i = 0; i < MF_PHASE_SAMPLE_DIMENSIONS; ++i) {
+    const double bad[] = {1.0, -1e-300, NAN, INFINITY};
+    for (int j = 0; j < 4; ++j) {
+      double u[5];
+      memcpy(u, u5, sizeof u);
+      u[i] = bad[j];
+      char needle[32];
+      snprintf(needle, sizeof needle, "u[%d] must lie in [0, 1)", i);
+      SAMPLE_CASE(mf_phase_sample(m, fr, good, u, &ps), MF_ERROR_INVALID_ARGUMENT, needle);
+    }
+  }
+  /* The largest double below 1 is a valid uniform. */
+  const double u_edge[5] = {nextafter(1.0, 0.0), 0.0, nextafter(1.0, 0.0), 0.0, 0.5};
+  EXPECT_OK(mf_phase_sample(m, fr, good, u_edge, &ps));
+  mf_medium_free(m);
+#undef DOUBLE_CASE
+#undef FLIGHT_CASE
+#undef RGB_CASE
+#undef SAMPLE_CASE
+}
+
+int main(void) {
+  test_last_error_message(); /* first: checks the fresh-thread state */
+  test_version_and_status();
+  test_params_errors();
+  test_medium_new_errors();
+  test_medium_variants();
+  test_extinction_identities();
+  test_phase();
+  test_reference_values();
+  test_batches();
+  test_bad_query_arguments();
+  if (g_failures) {
+    fprintf(stderr, "abi_test: %d of %d checks FAILED\n", g_failures, g_checks);
+    return 1;
+  }
+  printf("abi_test: all %d checks passed\n", g_checks);
+  return 0;
+}

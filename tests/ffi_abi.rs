@@ -1,0 +1,357 @@
+//! The C ABI gives the same numbers as the safe core, bit for bit.
+//!
+//! Every `extern "C"` query of `macrofacet::ffi` is called (as a C host would, through raw
+//! pointers) for many seeded random inputs on media covering the parameter table, and compared
+//! with `medium_from_params` + the core methods on the same inputs, preprocessed exactly as the
+//! documented contract says (frame from normal and tangent, world directions checked to unit
+//! length and taken to the local frame). No tolerance: the FFI layer must add no arithmetic.
+//! Also checks the `#[repr(C)]` layouts against the numbers `tests/c/abi_test.c` asserts with
+//! `offsetof`, so that both sides of the boundary agree on them.
+
+use glam::DVec3;
+use macrofacet::ffi::*;
+use macrofacet::frame::{check_direction, Frame};
+use macrofacet::{medium_from_params, FreeFlight, MacrofacetMedium, ParamSet};
+use std::ffi::CString;
+use std::mem::{offset_of, size_of};
+use std::ptr;
+
+/// splitmix64, uniforms in [0, 1).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+    /// A world direction of length 1 within the accepted 1e-6 (not exactly 1: renormalisation
+    /// is part of the contract).
+    fn direction(&mut self) -> DVec3 {
+        let z = 1.0 - 2.0 * self.next();
+        let phi = 2.0 * std::f64::consts::PI * self.next();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        DVec3::new(r * phi.cos(), r * phi.sin(), z) * (1.0 + 4e-7 * (self.next() - 0.5))
+    }
+    fn frame(&mut self) -> mf_frame {
+        if self.next() < 0.25 {
+            return mf_frame { normal: v(DVec3::Z), tangent: v(DVec3::X) };
+        }
+        // Unnormalised normal; a tangent that is not orthogonal (or zero) to it.
+        let n = self.direction() * (0.5 + 2.0 * self.next());
+        let t = if self.next() < 0.1 { DVec3::ZERO } else { self.direction() };
+        mf_frame { normal: v(n), tangent: v(t) }
+    }
+}
+
+fn v(d: DVec3) -> mf_vec3 {
+    mf_vec3 { x: d.x, y: d.y, z: d.z }
+}
+fn dv(d: mf_vec3) -> DVec3 {
+    DVec3::new(d.x, d.y, d.z)
+}
+fn bits3(c: [f64; 3]) -> [u64; 3] {
+    c.map(f64::to_bits)
+}
+fn rgb_bits(c: mf_rgb) -> [u64; 3] {
+    bits3([c.r, c.g, c.b])
+}
+
+enum P {
+    F(&'static str, f64),
+    S(&'static str, &'static str),
+    C(&'static str, [f64; 3]),
+}
+
+/// The same parameters as an FFI handle and as a core medium.
+fn media(params: &[P]) -> (*mut mf_medium, MacrofacetMedium) {
+    let mut set = ParamSet::new();
+    let mut handle: *mut mf_params = ptr::null_mut();
+    unsafe {
+        assert_eq!(mf_params_new(&mut handle), mf_status::MF_OK);
+        for p in params {
+            let status = match *p {
+                P::F(n, x) => {
+                    set.set_float(n, x);
+                    mf_params_set_float(handle, CString::new(n).unwrap().as_ptr(), x)
+                }
+                P::S(n, s) => {
+                    set.set_string(n, s);
+                    mf_params_set_string(handle, CString::new(n).unwrap().as_ptr(), CString::new(s).unwrap().as_ptr())
+                }
+                P::C(n, c) => {
+                    set.set_rgb(n, c);
+                    mf_params_set_rgb(handle, CString::new(n).unwrap().as_ptr(), c.as_ptr())
+                }
+            };
+            assert_eq!(status, mf_status::MF_OK);
+        }
+        let mut medium: *mut mf_medium = ptr::null_mut();
+        assert_eq!(mf_medium_new(handle, &mut medium), mf_status::MF_OK);
+        mf_params_free(handle);
+        (medium, medium_from_params(&set).expect("core accepts what the FFI accepted"))
+    }
+}
+
+fn all_media() -> Vec<(&'static str, Vec<P>)> {
+    use P::*;
+    vec![
+        ("gpss eta/k", vec![F("sigma", 0.5), F("shell_extent", 8.0), F("alpha_u", 0.3), F("alpha_v", 0.6), F("alpha_z", 0.4),
+            C("eta", [0.2, 0.9, 1.1]), C("k", [3.9, 2.4, 2.1])]),
+        ("gpss kernel Au", vec![F("variance", 0.04), F("lengthscale_x", 0.5), F("lengthscale_y", 0.7), F("lengthscale_z", 1.3),
+            S("material", "Au")]),
+        ("gpss isotropic mirror", vec![F("sigma", 0.1), F("alpha", 0.5), C("specular_reflectance", [0.9, 0.8, 0.7])]),
+        ("gpss mixture Ag", vec![F("sigma", 0.2), F("alpha_u", 0.3), F("alpha_v", 0.5), F("alpha_z", 0.6),
+            S("vndf_sampling", "mixture"), F("mixture_ratio", 0.3), S("material", "Ag")]),
+        ("gpss height field", vec![F("sigma", 0.2), F("alpha_u", 0.3), F("alpha_v", 0.5), F("alpha_z", 0.0), S("material", "Cr")]),
+        ("beckmann Cu", vec![F("sigma", 1.5), S("distribution", "beckmann"), F("alpha_u", 0.2), F("alpha_v", 0.45), S("material", "Cu")]),
+        ("ggx Al", vec![F("sigma", 0.05), S("distribution", "ggx"), F("alpha", 0.35), S("material", "Al")]),
+        ("ggx kernel", vec![F("sigma", 0.05), S("distribution", "ggx"), F("lengthscale_x", 0.2), F("lengthscale_y", 0.1)]),
+        ("gpss diffuse", vec![F("sigma", 0.3), F("alpha", 0.4), S("micro_bsdf", "diffuse"), C("reflectance", [0.2, 0.5, 0.8])]),
+        ("beckmann diffuse", vec![F("sigma", 0.3), S("distribution", "beckmann"), F("alpha", 0.6), S("micro_bsdf", "diffuse")]),
+    ]
+}
+
+/// The FFI's preprocessing of an event, done with the core: the frame, directions to local.
+struct Core {
+    frame: Frame,
+}
+impl Core {
+    fn new(f: &mf_frame) -> Self {
+        Core { frame: Frame::from_normal_tangent(dv(f.normal), dv(f.tangent)).unwrap() }
+    }
+    fn local(&self, d: mf_vec3) -> DVec3 {
+        self.frame.to_local(check_direction("d", dv(d)).unwrap())
+    }
+}
+
+#[test]
+fn ffi_queries_equal_the_core_bit_for_bit() {
+    let mut rng = Rng(20240607);
+    for (name, params) in all_media() {
+        let (handle, core) = media(&params);
+        let h = handle as *const mf_medium;
+        let diffuse = name.contains("diffuse");
+        let n = if diffuse { 150 } else { 1500 };
+        let sigma = core.height.sigma;
+        unsafe {
+            let mut top = f64::NAN;
+            assert_eq!(mf_medium_shell_top(h, &mut top), mf_status::MF_OK);
+            assert_eq!(top.to_bits(), core.height.top().to_bits(), "{name}: shell top");
+        }
+        for i in 0..n {
+            let fr = rng.frame();
+            let c = Core::new(&fr);
+            let f = sigma * (-4.0 + 9.0 * rng.next());
+            let f2 = sigma * (-4.0 + 9.0 * rng.next());
+            let d = v(rng.direction());
+            let t = match i % 5 {
+                0 => f64::INFINITY,
+                1 => 0.0,
+                _ => 5.0 * sigma * rng.next(),
+            };
+            let u = rng.next();
+            let wi = v(rng.direction());
+            let wo = v(rng.direction());
+            let us: [f64; MF_PHASE_SAMPLE_DIMENSIONS] = std::array::from_fn(|_| rng.next());
+            let (dl, wil, wol) = (c.local(d), c.local(wi), c.local(wo));
+            let ctx = format!("{name}, input {i}: f {f} d {d:?} t {t} u {u}");
+            unsafe {
+                let mut x = f64::NAN;
+                assert_eq!(mf_medium_sigma_t(h, &fr, f, d, &mut x), mf_status::MF_OK);
+                assert_eq!(x.to_bits(), core.sigma_t(f, dl).to_bits(), "sigma_t: {ctx}");
+                assert_eq!(mf_medium_majorant(h, &fr, f, f2, d, &mut x), mf_status::MF_OK);
+                assert_eq!(x.to_bits(), core.majorant(f, f2, dl).to_bits(), "majorant: {ctx}");
+                assert_eq!(mf_medium_optical_depth(h, &fr, f, d, t, &mut x), mf_status::MF_OK);
+                assert_eq!(x.to_bits(), core.optical_depth(f, dl, t).to_bits(), "optical depth: {ctx}");
+                assert_eq!(mf_medium_transmittance(h, &fr, f, d, t, &mut x), mf_status::MF_OK);
+                assert_eq!(x.to_bits(), core.transmittance(f, dl, t).to_bits(), "transmittance: {ctx}");
+
+                let mut fl = mf_free_flight { scattered: false, t: f64::NAN };
+                assert_eq!(mf_medium_sample_free_flight(h, &fr, f, d, t, u, &mut fl), mf_status::MF_OK);
+                match core.sample_free_flight(f, dl, t, u) {
+                    FreeFlight::Scatter { t: tc } => {
+                        assert!(fl.scattered, "free flight scatters: {ctx}");
+                        assert_eq!(fl.t.to_bits(), tc.to_bits(), "free flight t: {ctx}");
+                    }
+                    FreeFlight::Pass => {
+                        assert!(!fl.scattered, "free flight passes: {ctx}");
+                        assert_eq!(fl.t.to_bits(), t.to_bits(), "pass reports t_max: {ctx}");
+                    }
+                }
+
+                let mut val = mf_rgb { r: f64::NAN, g: f64::NAN, b: f64::NAN };
+                assert_eq!(mf_phase_eval(h, &fr, wi, wo, &mut val), mf_status::MF_OK);
+                assert_eq!(rgb_bits(val), bits3(core.phase.eval(wil, wol)), "phase eval: {ctx}");
+                assert_eq!(mf_phase_pdf(h, &fr, wi, wo, &mut x), mf_status::MF_OK);
+                assert_eq!(x.to_bits(), core.phase.pdf(wil, wol).to_bits(), "phase pdf: {ctx}");
+
+                let mut s = mf_phase_sample_result {
+                    wo: mf_vec3 { x: 9.0, y: 9.0, z: 9.0 },
+                    weight: mf_rgb { r: 9.0, g: 9.0, b: 9.0 },
+                    pdf: 9.0,
+                    valid: true,
+                };
+                assert_eq!(mf_phase_sample(h, &fr, wi, us.as_ptr(), &mut s), mf_status::MF_OK);
+                match core.phase.sample(wil, us) {
+                    Some(cs) => {
+                        assert!(s.valid, "phase sample valid: {ctx}");
+                        let w = c.frame.to_world(cs.wo);
+                        assert_eq!([s.wo.x, s.wo.y, s.wo.z].map(f64::to_bits), [w.x, w.y, w.z].map(f64::to_bits), "sample wo: {ctx}");
+                        assert_eq!(rgb_bits(s.weight), bits3(cs.weight), "sample weight: {ctx}");
+                        assert_eq!(s.pdf.to_bits(), cs.pdf.to_bits(), "sample pdf: {ctx}");
+                    }
+                    None => {
+                        assert!(!s.valid, "phase sample invalid: {ctx}");
+                        assert_eq!((s.pdf, s.wo.x, s.wo.y, s.wo.z, s.weight.r), (0.0, 0.0, 0.0, 0.0, 0.0), "{ctx}");
+                    }
+                }
+            }
+        }
+        unsafe { mf_medium_free(handle) };
+    }
+}
+
+#[test]
+fn batches_equal_the_core_bit_for_bit() {
+    let mut rng = Rng(77);
+    for (name, params) in all_media() {
+        let (handle, core) = media(&params);
+        let h = handle as *const mf_medium;
+        let count = if name.contains("diffuse") { 40 } else { 400 };
+        let sigma = core.height.sigma;
+        let mut fq = Vec::new();
+        let mut pq = Vec::new();
+        let mut sq = Vec::new();
+        for i in 0..count {
+            let frame = rng.frame();
+            fq.push(mf_flight_query {
+                frame,
+                f: sigma * (-4.0 + 9.0 * rng.next()),
+                d: v(rng.direction()),
+                t_max: if i % 4 == 0 { f64::INFINITY } else { 4.0 * sigma * rng.next() },
+                u: rng.next(),
+            });
+            pq.push(mf_phase_query { frame, wi: v(rng.direction()), wo: v(rng.direction()) });
+            sq.push(mf_phase_sample_query { frame, wi: v(rng.direction()), u: std::array::from_fn(|_| rng.next()) });
+        }
+        let mut tr = vec![f64::NAN; count];
+        let mut ff = vec![mf_free_flight { scattered: false, t: f64::NAN }; count];
+        let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+        let mut pv = vec![mf_phase_value { value: mf_rgb { r: 0.0, g: 0.0, b: 0.0 }, pdf: f64::NAN }; count];
+        let mut ps = vec![mf_phase_sample_result { wo: zero, weight: mf_rgb { r: 0.0, g: 0.0, b: 0.0 }, pdf: f64::NAN, valid: false }; count];
+        unsafe {
+            assert_eq!(mf_medium_transmittance_batch(h, fq.as_ptr(), count, tr.as_mut_ptr()), mf_status::MF_OK);
+            assert_eq!(mf_medium_sample_free_flight_batch(h, fq.as_ptr(), count, ff.as_mut_ptr()), mf_status::MF_OK);
+            assert_eq!(mf_phase_eval_batch(h, pq.as_ptr(), count, pv.as_mut_ptr()), mf_status::MF_OK);
+            assert_eq!(mf_phase_sample_batch(h, sq.as_ptr(), count, ps.as_mut_ptr()), mf_status::MF_OK);
+        }
+        for i in 0..count {
+            let ctx = format!("{name}, query {i}");
+            let q = &fq[i];
+            let c = Core::new(&q.frame);
+            let dl = c.local(q.d);
+            assert_eq!(tr[i].to_bits(), core.transmittance(q.f, dl, q.t_max).to_bits(), "transmittance batch: {ctx}");
+            match core.sample_free_flight(q.f, dl, q.t_max, q.u) {
+                FreeFlight::Scatter { t } => assert!(ff[i].scattered && ff[i].t.to_bits() == t.to_bits(), "flight batch: {ctx}"),
+                FreeFlight::Pass => assert!(!ff[i].scattered && ff[i].t.to_bits() == q.t_max.to_bits(), "flight batch: {ctx}"),
+            }
+            let c = Core::new(&pq[i].frame);
+            let (wi, wo) = (c.local(pq[i].wi), c.local(pq[i].wo));
+            assert_eq!(rgb_bits(pv[i].value), bits3(core.phase.eval(wi, wo)), "eval batch: {ctx}");
+            assert_eq!(pv[i].pdf.to_bits(), core.phase.pdf(wi, wo).to_bits(), "pdf batch: {ctx}");
+            let c = Core::new(&sq[i].frame);
+            match core.phase.sample(c.local(sq[i].wi), sq[i].u) {
+                Some(s) => {
+                    let w = c.frame.to_world(s.wo);
+                    assert!(ps[i].valid, "sample batch valid: {ctx}");
+                    assert_eq!([ps[i].wo.x, ps[i].wo.y, ps[i].wo.z].map(f64::to_bits), [w.x, w.y, w.z].map(f64::to_bits), "{ctx}");
+                    assert_eq!(rgb_bits(ps[i].weight), bits3(s.weight), "sample batch weight: {ctx}");
+                    assert_eq!(ps[i].pdf.to_bits(), s.pdf.to_bits(), "sample batch pdf: {ctx}");
+                }
+                None => assert!(!ps[i].valid, "sample batch invalid: {ctx}"),
+            }
+        }
+        unsafe { mf_medium_free(handle) };
+    }
+}
+
+/// The FFI rejects exactly what the core rejects when building, with the matching status.
+#[test]
+fn construction_errors_map_to_statuses() {
+    use P::*;
+    let cases: Vec<(Vec<P>, mf_status)> = vec![
+        (vec![F("alpha", 0.3)], mf_status::MF_ERROR_MISSING_PARAMETER),
+        (vec![F("sigma", -1.0), F("alpha", 0.3)], mf_status::MF_ERROR_INVALID_VALUE),
+        (vec![F("sigma", 1.0), F("alpha", 0.3), F("bogus", 1.0)], mf_status::MF_ERROR_UNKNOWN_PARAMETER),
+        (vec![S("sigma", "1"), F("alpha", 0.3)], mf_status::MF_ERROR_WRONG_TYPE),
+        (vec![F("sigma", 1.0), F("alpha", 0.3), S("distribution", "phong")], mf_status::MF_ERROR_INVALID_VALUE),
+    ];
+    for (params, want) in cases {
+        let mut set = ParamSet::new();
+        let mut handle: *mut mf_params = ptr::null_mut();
+        unsafe {
+            mf_params_new(&mut handle);
+            for p in &params {
+                match *p {
+                    F(n, x) => {
+                        set.set_float(n, x);
+                        mf_params_set_float(handle, CString::new(n).unwrap().as_ptr(), x);
+                    }
+                    S(n, s) => {
+                        set.set_string(n, s);
+                        mf_params_set_string(handle, CString::new(n).unwrap().as_ptr(), CString::new(s).unwrap().as_ptr());
+                    }
+                    C(n, c) => {
+                        set.set_rgb(n, c);
+                        mf_params_set_rgb(handle, CString::new(n).unwrap().as_ptr(), c.as_ptr());
+                    }
+                }
+            }
+            let sentinel = 0x5EAF00D as *mut mf_medium;
+            let mut out = sentinel;
+            let status = mf_medium_new(handle, &mut out);
+            mf_params_free(handle);
+            let core_err = medium_from_params(&set).expect_err("core must reject too");
+            assert_eq!(status, want, "status for {:?}", core_err);
+            assert_eq!(mf_status::from(core_err.kind), want);
+            assert_eq!(out, sentinel, "out_medium written on failure");
+            let mut buf = [0u8; 512];
+            let mut len = 0usize;
+            assert_eq!(mf_last_error_message(buf.as_mut_ptr().cast(), buf.len(), &mut len), mf_status::MF_OK);
+            assert_eq!(&buf[..len], core_err.message.as_bytes(), "the FFI message is the core's");
+        }
+    }
+}
+
+/// Layout of the `#[repr(C)]` types: the same numbers tests/c/abi_test.c asserts with offsetof.
+#[test]
+fn repr_c_layouts_match_the_c_test() {
+    assert_eq!((size_of::<mf_vec3>(), offset_of!(mf_vec3, y), offset_of!(mf_vec3, z)), (24, 8, 16));
+    assert_eq!((size_of::<mf_rgb>(), offset_of!(mf_rgb, g), offset_of!(mf_rgb, b)), (24, 8, 16));
+    assert_eq!((size_of::<mf_frame>(), offset_of!(mf_frame, tangent)), (48, 24));
+    assert_eq!((size_of::<mf_free_flight>(), offset_of!(mf_free_flight, t)), (16, 8));
+    assert_eq!(
+        (size_of::<mf_phase_sample_result>(), offset_of!(mf_phase_sample_result, weight), offset_of!(mf_phase_sample_result, pdf), offset_of!(mf_phase_sample_result, valid)),
+        (64, 24, 48, 56)
+    );
+    assert_eq!(
+        (
+            size_of::<mf_flight_query>(),
+            offset_of!(mf_flight_query, f),
+            offset_of!(mf_flight_query, d),
+            offset_of!(mf_flight_query, t_max),
+            offset_of!(mf_flight_query, u)
+        ),
+        (96, 48, 56, 80, 88)
+    );
+    assert_eq!((size_of::<mf_phase_query>(), offset_of!(mf_phase_query, wi), offset_of!(mf_phase_query, wo)), (96, 48, 72));
+    assert_eq!((size_of::<mf_phase_value>(), offset_of!(mf_phase_value, pdf)), (32, 24));
+    assert_eq!(
+        (size_of::<mf_phase_sample_query>(), offset_of!(mf_phase_sample_query, wi), offset_of!(mf_phase_sample_query, u)),
+        (112, 48, 72)
+    );
+    assert_eq!(size_of::<mf_status>(), 4);
+}

@@ -1,0 +1,273 @@
+// mfhost — BSDF implementations (see bsdf.h).
+#include "bsdf.h"
+
+#include <complex>
+#include <map>
+
+namespace mf {
+
+float fresnel_dielectric(float cos_i, float eta, float* cos_t_out) {
+    if (cos_i < 0) {
+        eta = 1.0f / eta;
+        cos_i = -cos_i;
+    }
+    float sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
+    if (sin2_t >= 1.0f) {
+        if (cos_t_out) *cos_t_out = 0.0f;
+        return 1.0f;
+    }
+    float cos_t = std::sqrt(1.0f - sin2_t);
+    float rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    float rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    if (cos_t_out) *cos_t_out = cos_t;
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+float fresnel_conductor(float cos_i, float eta, float k) {
+    using C = std::complex<double>;
+    double c = std::clamp(double(std::fabs(cos_i)), 0.0, 1.0);
+    C n(eta, k);
+    C sin2_t = (1.0 - c * c) / (n * n);
+    C cos_t = std::sqrt(1.0 - sin2_t);
+    C r_perp = (c - n * cos_t) / (c + n * cos_t);
+    C r_par = (n * c - cos_t) / (n * c + cos_t);
+    return float(0.5 * (std::norm(r_perp) + std::norm(r_par)));
+}
+
+// RGB complex IORs: spectral measurements integrated against the CIE matching functions and
+// converted to linear sRGB, as tabulated in Tungsten's ComplexIorData.hpp (B. Bitterli), which
+// derives from the same measured data Mitsuba ships. Values are relative to vacuum/air.
+bool conductor_preset(const std::string& name, ConductorIor* out) {
+    static const std::map<std::string, std::pair<Rgb, Rgb>> table = {
+        {"Ag", {Rgb(0.1552646489f, 0.1167232965f, 0.1383806959f), Rgb(4.8283433224f, 3.1222459278f, 2.1469504455f)}},
+        {"Al", {Rgb(1.6574599595f, 0.8803689579f, 0.5212287346f), Rgb(9.2238691996f, 6.2695232477f, 4.8370012281f)}},
+        {"Au", {Rgb(0.1431189557f, 0.3749570432f, 1.4424785571f), Rgb(3.9831604247f, 2.3857207478f, 1.6032152899f)}},
+        {"Cr", {Rgb(4.3696828663f, 2.9167024892f, 1.6547005413f), Rgb(5.2064337956f, 4.2313645277f, 3.7549467933f)}},
+        {"Cu", {Rgb(0.2004376970f, 0.9240334304f, 1.1022119527f), Rgb(3.9129485033f, 2.4528477015f, 2.1421879552f)}},
+    };
+    if (name == "none") {
+        out->perfect = true;
+        out->eta = Rgb(0.0f);
+        out->k = Rgb(1.0f);
+        return true;
+    }
+    auto it = table.find(name);
+    if (it == table.end()) return false;
+    out->perfect = false;
+    out->eta = it->second.first;
+    out->k = it->second.second;
+    return true;
+}
+
+std::string conductor_preset_list() { return "none, Ag, Al, Au, Cr, Cu"; }
+
+bool dielectric_ior_by_name(const std::string& name, float* ior) {
+    // Mitsuba's table of named indices of refraction (at 589 nm).
+    static const std::map<std::string, float> table = {
+        {"vacuum", 1.0f},        {"helium", 1.00004f},        {"hydrogen", 1.00013f},   {"air", 1.00028f},
+        {"carbon dioxide", 1.00045f}, {"water", 1.3330f},     {"acetone", 1.36f},       {"ethanol", 1.361f},
+        {"carbon tetrachloride", 1.461f}, {"glycerol", 1.4729f}, {"benzene", 1.501f},   {"silicone oil", 1.52045f},
+        {"bromine", 1.661f},     {"water ice", 1.31f},        {"fused quartz", 1.458f}, {"pyrex", 1.470f},
+        {"acrylic glass", 1.49f}, {"polypropylene", 1.49f},   {"bk7", 1.5046f},         {"sodium chloride", 1.544f},
+        {"amber", 1.55f},        {"pet", 1.5750f},            {"diamond", 2.419f},
+    };
+    auto it = table.find(name);
+    if (it == table.end()) return false;
+    *ior = it->second;
+    return true;
+}
+
+namespace {
+
+Vec3 cosine_hemisphere(const Vec2& u) {
+    float r = std::sqrt(u.x), phi = 2.0f * kPi * u.y;
+    return Vec3(r * std::cos(phi), r * std::sin(phi), safe_sqrt(1.0f - u.x));
+}
+
+Rgb conductor_fresnel(const ConductorIor& ior, float cos_i) {
+    if (ior.perfect) return Rgb(1.0f);
+    return Rgb(fresnel_conductor(cos_i, ior.eta.r, ior.k.r), fresnel_conductor(cos_i, ior.eta.g, ior.k.g),
+               fresnel_conductor(cos_i, ior.eta.b, ior.k.b));
+}
+
+class Diffuse final : public Bsdf {
+public:
+    explicit Diffuse(const Rgb& r) : r_(r) {}
+    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
+        return r_ * (kInvPi * wi.z);
+    }
+    float pdf(const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return 0.0f;
+        return wi.z * kInvPi;
+    }
+    bool sample(const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z <= 0) return false;
+        s->wi = cosine_hemisphere(u);
+        if (s->wi.z <= 0) return false;
+        s->pdf = s->wi.z * kInvPi;
+        s->weight = r_;
+        s->delta = false;
+        s->transmission = false;
+        s->eta = 1.0f;
+        return true;
+    }
+    std::string name() const override { return "diffuse"; }
+
+private:
+    Rgb r_;
+};
+
+class Conductor final : public Bsdf {
+public:
+    Conductor(const ConductorIor& ior, const Rgb& spec) : ior_(ior), spec_(spec) {}
+    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec3& wo, float, const Vec2&, BsdfSample* s) const override {
+        if (wo.z <= 0) return false;
+        s->wi = Vec3(-wo.x, -wo.y, wo.z);
+        s->pdf = 1.0f;
+        s->weight = spec_ * conductor_fresnel(ior_, wo.z);
+        s->delta = true;
+        s->transmission = false;
+        s->eta = 1.0f;
+        return true;
+    }
+    bool is_delta() const override { return true; }
+    std::string name() const override { return "conductor"; }
+
+private:
+    ConductorIor ior_;
+    Rgb spec_;
+};
+
+class RoughConductor final : public Bsdf {
+public:
+    RoughConductor(const ConductorIor& ior, const Rgb& spec, MicrofacetType t, float au, float av, bool vis)
+        : ior_(ior), spec_(spec), mf_(t, au, av, vis) {}
+    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
+        Vec3 h = normalize(wo + wi);
+        float D = mf_.D(h);
+        if (D == 0) return Rgb(0.0f);
+        float G = mf_.G(wo, wi, h);
+        return spec_ * conductor_fresnel(ior_, dot(wo, h)) * (D * G / (4.0f * wo.z));
+    }
+    float pdf(const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return 0.0f;
+        Vec3 h = normalize(wo + wi);
+        float d = dot(wo, h);
+        if (d <= 0) return 0.0f;
+        return mf_.pdf(wo, h) / (4.0f * d);
+    }
+    bool sample(const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z <= 0) return false;
+        float mpdf;
+        Vec3 m = mf_.sample(wo, u, &mpdf);
+        if (!(mpdf > 0)) return false;
+        float d = dot(wo, m);
+        if (d <= 0) return false;
+        Vec3 wi = m * (2.0f * d) - wo;
+        if (wi.z <= 0) return false;
+        s->wi = wi;
+        s->pdf = mpdf / (4.0f * d);
+        if (!(s->pdf > 0) || !std::isfinite(s->pdf)) return false;
+        s->weight = eval(wo, wi) / s->pdf;
+        s->delta = false;
+        s->transmission = false;
+        s->eta = 1.0f;
+        return s->weight.finite();
+    }
+    std::string name() const override { return "roughconductor"; }
+
+private:
+    ConductorIor ior_;
+    Rgb spec_;
+    Microfacet mf_;
+};
+
+class Dielectric final : public Bsdf {
+public:
+    Dielectric(float eta, const Rgb& r, const Rgb& t) : eta_(eta), r_(r), t_(t) {}
+    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
+        if (wo.z == 0) return false;
+        float cos_t;
+        float F = fresnel_dielectric(wo.z, eta_, &cos_t);
+        s->delta = true;
+        if (u_lobe < F) {
+            s->wi = Vec3(-wo.x, -wo.y, wo.z);
+            s->pdf = F;
+            s->weight = r_;
+            s->transmission = false;
+            s->eta = 1.0f;
+        } else {
+            float eta_ti = wo.z > 0 ? eta_ : 1.0f / eta_;  // index on the wi side / wo side
+            s->wi = Vec3(-wo.x / eta_ti, -wo.y / eta_ti, wo.z > 0 ? -cos_t : cos_t);
+            s->pdf = 1.0f - F;
+            // Radiance is compressed/expanded by the change of solid angle.
+            s->weight = t_ / (eta_ti * eta_ti);
+            s->transmission = true;
+            s->eta = eta_ti;
+        }
+        return true;
+    }
+    bool is_delta() const override { return true; }
+    std::string name() const override { return "dielectric"; }
+
+private:
+    float eta_;
+    Rgb r_, t_;
+};
+
+class NullBsdf final : public Bsdf {
+public:
+    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec3&, float, const Vec2&, BsdfSample*) const override { return false; }
+    bool is_delta() const override { return true; }
+    bool is_null() const override { return true; }
+    std::string name() const override { return "null"; }
+};
+
+class TwoSided final : public Bsdf {
+public:
+    TwoSided(std::shared_ptr<Bsdf> f, std::shared_ptr<Bsdf> b) : f_(std::move(f)), b_(std::move(b)) {}
+    static Vec3 flip(const Vec3& v) { return Vec3(v.x, v.y, -v.z); }
+    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
+        return wo.z >= 0 ? f_->eval(wo, wi) : b_->eval(flip(wo), flip(wi));
+    }
+    float pdf(const Vec3& wo, const Vec3& wi) const override {
+        return wo.z >= 0 ? f_->pdf(wo, wi) : b_->pdf(flip(wo), flip(wi));
+    }
+    bool sample(const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z >= 0) return f_->sample(wo, ul, u, s);
+        if (!b_->sample(flip(wo), ul, u, s)) return false;
+        s->wi = flip(s->wi);
+        return true;
+    }
+    bool is_delta() const override { return f_->is_delta() && b_->is_delta(); }
+    std::string name() const override { return "twosided"; }
+
+private:
+    std::shared_ptr<Bsdf> f_, b_;
+};
+
+}  // namespace
+
+std::shared_ptr<Bsdf> make_diffuse(const Rgb& r) { return std::make_shared<Diffuse>(r); }
+std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, const Rgb& s) { return std::make_shared<Conductor>(ior, s); }
+std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, const Rgb& s, MicrofacetType t, float au, float av,
+                                           bool vis) {
+    return std::make_shared<RoughConductor>(ior, s, t, au, av, vis);
+}
+std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {
+    return std::make_shared<Dielectric>(int_ior / ext_ior, r, t);
+}
+std::shared_ptr<Bsdf> make_null_bsdf() { return std::make_shared<NullBsdf>(); }
+std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> f, std::shared_ptr<Bsdf> b) {
+    return std::make_shared<TwoSided>(std::move(f), std::move(b));
+}
+
+}  // namespace mf

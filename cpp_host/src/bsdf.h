@@ -1,0 +1,60 @@
+// mfhost — BSDFs. All directions are in the local shading frame (normal = +z); `wo` points
+// towards the previous path vertex (the camera side), `wi` is the sampled/evaluated direction.
+// Like Mitsuba 3, diffuse and (rough) conductors are one-sided (black from the back side; wrap
+// them in `twosided`), dielectrics are two-sided by nature, `null` is an index-matched interface
+// that only delimits media.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "math.h"
+#include "microfacet.h"
+
+namespace mf {
+
+struct BsdfSample {
+    Vec3 wi;
+    float pdf = 0;          // solid-angle pdf (for delta lobes: the discrete lobe probability)
+    Rgb weight;             // f * |cos wi| / pdf
+    bool delta = false;     // sampled a Dirac lobe
+    bool transmission = false;
+    float eta = 1.0f;       // relative IOR crossed (n_wi side / n_wo side); 1 for reflection
+};
+
+class Bsdf {
+public:
+    virtual ~Bsdf() = default;
+    /// f(wo, wi) |cos wi| for the non-Dirac part.
+    virtual Rgb eval(const Vec3& wo, const Vec3& wi) const = 0;
+    virtual float pdf(const Vec3& wo, const Vec3& wi) const = 0;
+    virtual bool sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const = 0;
+    /// True when every lobe is a Dirac delta (next-event estimation is skipped).
+    virtual bool is_delta() const { return false; }
+    /// The `null` BSDF: the surface only delimits media and is skipped by rays.
+    virtual bool is_null() const { return false; }
+    virtual std::string name() const = 0;
+};
+
+float fresnel_dielectric(float cos_i, float eta, float* cos_t);  // eta = n_inside / n_outside
+float fresnel_conductor(float cos_i, float eta, float k);       // exact, complex IOR
+
+struct ConductorIor {
+    Rgb eta, k;
+    bool perfect = false;  // material "none": F = 1
+};
+/// Conductor presets (RGB eta/k). Returns false for an unknown name.
+bool conductor_preset(const std::string& name, ConductorIor* out);
+std::string conductor_preset_list();
+/// Named dielectric IORs (Mitsuba's table). Returns false for an unknown name.
+bool dielectric_ior_by_name(const std::string& name, float* ior);
+
+std::shared_ptr<Bsdf> make_diffuse(const Rgb& reflectance);
+std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, const Rgb& specular_reflectance);
+std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, const Rgb& specular_reflectance,
+                                           MicrofacetType type, float alpha_u, float alpha_v, bool sample_visible);
+std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);
+std::shared_ptr<Bsdf> make_null_bsdf();
+std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> front, std::shared_ptr<Bsdf> back);
+
+}  // namespace mf

@@ -1,0 +1,190 @@
+// mfhost — emitters (see emitter.h).
+#include "emitter.h"
+
+namespace mf {
+
+// ----------------------------------------------------------------------------------------------
+// Distribution2D
+
+Distribution2D::Distribution2D(const std::vector<float>& f, int nu, int nv) : nu_(nu), nv_(nv), f_(f) {
+    cond_cdf_.assign(size_t(nv) * (nu + 1), 0.0f);
+    row_int_.assign(size_t(nv), 0.0f);
+    marg_cdf_.assign(size_t(nv) + 1, 0.0f);
+    for (int v = 0; v < nv; ++v) {
+        double acc = 0;
+        float* cdf = &cond_cdf_[size_t(v) * (nu + 1)];
+        cdf[0] = 0;
+        for (int u = 0; u < nu; ++u) {
+            acc += std::max(0.0f, f[size_t(v) * nu + u]) / double(nu);
+            cdf[u + 1] = float(acc);
+        }
+        row_int_[size_t(v)] = float(acc);
+        if (acc > 0)
+            for (int u = 1; u <= nu; ++u) cdf[u] = float(cdf[u] / acc);
+        else
+            for (int u = 1; u <= nu; ++u) cdf[u] = float(u) / nu;
+        cdf[nu] = 1.0f;
+    }
+    double acc = 0;
+    for (int v = 0; v < nv; ++v) {
+        acc += row_int_[size_t(v)] / double(nv);
+        marg_cdf_[size_t(v) + 1] = float(acc);
+    }
+    total_ = float(acc);
+    if (acc > 0)
+        for (int v = 1; v <= nv; ++v) marg_cdf_[size_t(v)] = float(marg_cdf_[size_t(v)] / acc);
+    else
+        for (int v = 1; v <= nv; ++v) marg_cdf_[size_t(v)] = float(v) / nv;
+    marg_cdf_[size_t(nv)] = 1.0f;
+}
+
+static int find_interval(const float* cdf, int n, float u) {
+    // largest i in [0, n-1] with cdf[i] <= u
+    int i = int(std::upper_bound(cdf, cdf + n + 1, u) - cdf) - 1;
+    return std::clamp(i, 0, n - 1);
+}
+
+Vec2 Distribution2D::sample(const Vec2& u, float* pdf) const {
+    int v = find_interval(marg_cdf_.data(), nv_, u.y);
+    // skip zero-probability rows (can only be selected at exact cdf ties)
+    float dv = marg_cdf_[size_t(v) + 1] - marg_cdf_[size_t(v)];
+    float fv = dv > 0 ? (u.y - marg_cdf_[size_t(v)]) / dv : 0.5f;
+    const float* cdf = &cond_cdf_[size_t(v) * (nu_ + 1)];
+    int c = find_interval(cdf, nu_, u.x);
+    float du = cdf[c + 1] - cdf[c];
+    float fu = du > 0 ? (u.x - cdf[c]) / du : 0.5f;
+    Vec2 uv((c + std::clamp(fu, 0.0f, 1.0f)) / nu_, (v + std::clamp(fv, 0.0f, 1.0f)) / nv_);
+    *pdf = total_ > 0 ? std::max(0.0f, f_[size_t(v) * nu_ + c]) / total_ : 1.0f;
+    return uv;
+}
+
+float Distribution2D::pdf(const Vec2& uv) const {
+    int c = std::clamp(int(uv.x * nu_), 0, nu_ - 1);
+    int v = std::clamp(int(uv.y * nv_), 0, nv_ - 1);
+    return total_ > 0 ? std::max(0.0f, f_[size_t(v) * nu_ + c]) / total_ : 1.0f;
+}
+
+// ----------------------------------------------------------------------------------------------
+
+bool AreaEmitter::sample_li(const Vec3& ref, const Vec2& u, EmitterSample* s) const {
+    Vec3 p, n;
+    shape_->sample_position(u, &p, &n);
+    Vec3 d = p - ref;
+    float dist2 = length_sq(d);
+    if (!(dist2 > 0)) return false;
+    float dist = std::sqrt(dist2);
+    Vec3 wi = d / dist;
+    float cos_l = -dot(n, wi);
+    if (cos_l <= 0) return false;  // one-sided emission
+    s->wi = wi;
+    s->dist = dist;
+    s->Li = L_;
+    s->pdf = dist2 / (cos_l * shape_->surface_area());
+    s->delta = false;
+    return std::isfinite(s->pdf);
+}
+
+float AreaEmitter::pdf_surface(const Vec3& ref, const SurfaceHit& hit) const {
+    Vec3 d = hit.p - ref;
+    float dist2 = length_sq(d);
+    float cos_l = std::fabs(dot(hit.ng, d)) / std::sqrt(dist2);
+    if (!(cos_l > 0)) return 0.0f;
+    return dist2 / (cos_l * shape_->surface_area());
+}
+
+bool PointEmitter::sample_li(const Vec3& ref, const Vec2&, EmitterSample* s) const {
+    Vec3 d = p_ - ref;
+    float dist2 = length_sq(d);
+    if (!(dist2 > 0)) return false;
+    s->dist = std::sqrt(dist2);
+    s->wi = d / s->dist;
+    s->Li = I_ / dist2;
+    s->pdf = 1.0f;
+    s->delta = true;
+    return true;
+}
+
+bool DirectionalEmitter::sample_li(const Vec3&, const Vec2&, EmitterSample* s) const {
+    s->wi = -d_;
+    s->dist = kInf;
+    s->Li = E_;
+    s->pdf = 1.0f;
+    s->delta = true;
+    return true;
+}
+
+bool ConstantEmitter::sample_li(const Vec3&, const Vec2& u, EmitterSample* s) const {
+    float z = 1.0f - 2.0f * u.x;
+    float r = safe_sqrt(1.0f - z * z), phi = 2.0f * kPi * u.y;
+    s->wi = Vec3(r * std::cos(phi), r * std::sin(phi), z);
+    s->dist = kInf;
+    s->Li = L_;
+    s->pdf = kInv4Pi;
+    s->delta = false;
+    return true;
+}
+
+// ----------------------------------------------------------------------------------------------
+// Envmap
+
+EnvmapEmitter::EnvmapEmitter(std::vector<float> rgb, int width, int height, float scale, const Mat4& to_world)
+    : rgb_(std::move(rgb)), w_(width), h_(height), scale_(scale), to_world_(to_world), to_local_(to_world.inverse()) {
+    std::vector<float> lum(size_t(w_) * h_);
+    for (int y = 0; y < h_; ++y) {
+        float sin_t = std::sin(kPi * (y + 0.5f) / h_);
+        for (int x = 0; x < w_; ++x) {
+            size_t i = size_t(y) * w_ + x;
+            Rgb c(rgb_[3 * i], rgb_[3 * i + 1], rgb_[3 * i + 2]);
+            lum[i] = std::max(0.0f, c.luminance()) * sin_t;
+        }
+    }
+    dist_ = Distribution2D(lum, w_, h_);
+}
+
+Vec2 EnvmapEmitter::dir_to_uv(const Vec3& world_d, float* sin_theta) const {
+    Vec3 v = normalize(to_local_.vector(world_d));
+    float rxz = std::sqrt(v.x * v.x + v.z * v.z);
+    float u = std::atan2(v.x, -v.z) * (0.5f * kInvPi);
+    // atan2 rather than acos(y): accurate near the poles, where the pdf ~ 1/sin(theta)
+    float t = std::atan2(rxz, v.y) * kInvPi;
+    u -= std::floor(u);
+    if (sin_theta) *sin_theta = rxz;
+    return Vec2(u, t);
+}
+
+Rgb EnvmapEmitter::texel(const Vec2& uv) const {
+    int x = std::clamp(int(uv.x * w_), 0, w_ - 1);
+    int y = std::clamp(int(uv.y * h_), 0, h_ - 1);
+    size_t i = size_t(y) * w_ + x;
+    return Rgb(rgb_[3 * i], rgb_[3 * i + 1], rgb_[3 * i + 2]) * scale_;
+}
+
+Rgb EnvmapEmitter::eval_direction(const Vec3& d) const { return texel(dir_to_uv(d, nullptr)); }
+
+float EnvmapEmitter::pdf_direction(const Vec3& d) const {
+    float st;
+    Vec2 uv = dir_to_uv(d, &st);
+    if (!(st > 0)) return 0.0f;
+    return dist_.pdf(uv) / (2.0f * kPi * kPi * st);
+}
+
+bool EnvmapEmitter::sample_li(const Vec3&, const Vec2& u, EmitterSample* s) const {
+    float pdf_uv;
+    Vec2 uv = dist_.sample(u, &pdf_uv);
+    if (!(pdf_uv > 0)) return false;
+    float phi = uv.x * 2.0f * kPi, theta = uv.y * kPi;
+    float st = std::sin(theta), ct = std::cos(theta);
+    if (!(st > 0)) return false;
+    Vec3 local(std::sin(phi) * st, ct, -std::cos(phi) * st);
+    s->wi = normalize(to_world_.vector(local));
+    s->dist = kInf;
+    // Value and pdf of the returned (float) direction, so that NEE and BSDF-sampled hits of
+    // the same direction agree exactly (matters at texel edges and the poles).
+    s->Li = eval_direction(s->wi);
+    s->pdf = pdf_direction(s->wi);
+    if (!(s->pdf > 0)) return false;
+    s->delta = false;
+    return true;
+}
+
+}  // namespace mf

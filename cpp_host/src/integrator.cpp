@@ -1,0 +1,205 @@
+// mfhost — volumetric path tracer (see integrator.h).
+#include "integrator.h"
+
+namespace mf {
+
+namespace {
+constexpr int kMaxNullCrossings = 1024;
+}
+
+Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium,
+                                         Sampler& sampler) const {
+    const bool vol = scene_.integrator.volumetric;
+    Rgb T(1.0f);
+    for (int i = 0; i < kMaxNullCrossings; ++i) {
+        Ray r(o, d, 0.0f, dist);
+        SurfaceHit h;
+        bool hit = scene_.intersect(r, &h);
+        float seg = hit ? h.t : dist;
+        if (vol && medium) {
+            T *= medium->transmittance(r, seg, sampler);
+            if (T.is_black()) return T;
+        }
+        if (!hit) return T;
+        if (!h.shape->bsdf->is_null()) return Rgb(0.0f);
+        if (h.shape->is_medium_transition()) medium = h.shape->target_medium(h.ng, d);
+        o = offset_ray_origin(h.p, h.ng, d);
+        if (std::isfinite(dist)) {
+            dist -= h.t;
+            if (dist <= 0) return T;
+        }
+    }
+    return Rgb(0.0f);
+}
+
+Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
+    const IntegratorSettings& cfg = scene_.integrator;
+    const bool vol = cfg.volumetric;
+    if (!vol) medium = nullptr;
+    const auto& emitters = scene_.emitters();
+    const float sel_pdf = emitters.empty() ? 0.0f : 1.0f / float(emitters.size());
+
+    Rgb L(0.0f), beta(1.0f);
+    // Hero channel for chromatic free flights, and the product of per-channel pdf ratios
+    // (see Medium::sample_free_flight); the effective throughput is beta / avg(ratio).
+    const int hero = std::min(int(sampler.next_1d() * 3.0f), 2);
+    Rgb ratio(1.0f);
+    auto throughput = [&]() { return beta / ratio.average(); };
+    float eta_scale = 1.0f;
+    int depth = 0;            // number of scattering events so far
+    bool prev_delta = true;   // last direction came from a Dirac lobe (or the camera)
+    float prev_pdf = 0.0f;    // its solid-angle pdf
+    Vec3 prev_p = ray.o;      // where it was sampled
+    int null_crossings = 0;
+
+    // Next-event estimation: uniform emitter choice, MIS against eval_pdf.
+    auto direct = [&](const Vec3& origin, const Medium* m, const Vec3& ref, auto&& eval) -> Rgb {
+        if (emitters.empty()) return Rgb(0.0f);
+        size_t idx = std::min(size_t(sampler.next_1d() * float(emitters.size())), emitters.size() - 1);
+        Vec2 u = sampler.next_2d();
+        EmitterSample es;
+        if (!emitters[idx]->sample_li(ref, u, &es)) return Rgb(0.0f);
+        if (es.Li.is_black() || !(es.pdf > 0)) return Rgb(0.0f);
+        float f_pdf = 0.0f;
+        Rgb f = eval(es.wi, &f_pdf);
+        if (f.is_black()) return Rgb(0.0f);
+        float dist = std::isfinite(es.dist) ? es.dist * (1.0f - 1e-4f) : kInf;
+        Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler);
+        if (T.is_black()) return Rgb(0.0f);
+        float light_pdf = es.pdf * sel_pdf;
+        float w = es.delta ? 1.0f : power_heuristic(light_pdf, f_pdf);
+        return f * es.Li * T * (w / light_pdf);
+    };
+
+    auto russian_roulette = [&]() -> bool {
+        if (depth < cfg.rr_depth) return true;
+        float q = std::min(throughput().max() * eta_scale, 0.95f);
+        if (!(sampler.next_1d() < q)) return false;
+        beta = beta / q;
+        return true;
+    };
+
+    while (true) {
+        SurfaceHit hit;
+        bool found = scene_.intersect(ray, &hit);
+
+        // ---- medium: free flight up to the surface (or infinity)
+        if (medium) {
+            MediumInteraction mi;
+            Rgb w, pr;
+            float tmax = found ? hit.t : kInf;
+            bool scattered = medium->sample_free_flight(ray, tmax, hero, sampler, &mi, &w, &pr);
+            beta *= w;
+            ratio *= pr;
+            if (beta.is_black() || !beta.finite() || !(ratio.average() > 0)) break;
+            {   // renormalise so that avg(ratio) = 1 (throughput unchanged, no overflow)
+                float a = ratio.average();
+                beta = beta / a;
+                ratio = ratio / a;
+            }
+            if (scattered) {
+                if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
+                const PhaseFunction& ph = medium->phase();
+                Vec3 wo = -ray.d;
+                L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {
+                    *pdf = ph.pdf(mi, wo, wi);
+                    return ph.eval(mi, wo, wi);
+                });
+                Vec3 wi;
+                float pdf;
+                Rgb pw;
+                if (!ph.sample(mi, wo, sampler, &wi, &pdf, &pw)) break;
+                beta *= pw;
+                prev_delta = false;
+                prev_pdf = pdf;
+                prev_p = mi.p;
+                ray = Ray(mi.p, wi);
+                ++depth;
+                if (!russian_roulette()) break;
+                continue;
+            }
+        }
+
+        // ---- escaped: infinite emitters
+        if (!found) {
+            if (!(cfg.hide_emitters && depth == 0)) {
+                for (const Emitter* e : scene_.infinite_emitters()) {
+                    Rgb Le = e->eval_direction(ray.d);
+                    if (Le.is_black()) continue;
+                    float w = prev_delta ? 1.0f : power_heuristic(prev_pdf, e->pdf_direction(ray.d) * sel_pdf);
+                    L += throughput() * Le * w;
+                }
+            }
+            break;
+        }
+
+        const Shape* shape = hit.shape;
+        // ---- emission from an area light
+        if (shape->emitter && !(cfg.hide_emitters && depth == 0)) {
+            Rgb Le = shape->emitter->eval_surface(hit, -ray.d);
+            if (!Le.is_black()) {
+                float w = prev_delta ? 1.0f : power_heuristic(prev_pdf, shape->emitter->pdf_surface(prev_p, hit) * sel_pdf);
+                L += throughput() * Le * w;
+            }
+        }
+
+        const Bsdf& bsdf = *shape->bsdf;
+        if (bsdf.is_null()) {
+            // index-matched interface: continue straight, possibly into another medium
+            if (++null_crossings > kMaxNullCrossings) break;
+            if (vol && shape->is_medium_transition()) medium = shape->target_medium(hit.ng, ray.d);
+            ray = Ray(offset_ray_origin(hit.p, hit.ng, ray.d), ray.d);
+            continue;
+        }
+
+        if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
+
+        Frame frame(hit.ns);
+        Vec3 wo_l = frame.to_local(-ray.d);
+        if (!bsdf.is_delta() && !emitters.empty()) {
+            // shadow rays leave on the side of wi; pick the origin and medium accordingly
+            size_t idx = std::min(size_t(sampler.next_1d() * float(emitters.size())), emitters.size() - 1);
+            Vec2 u = sampler.next_2d();
+            EmitterSample es;
+            if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0) {
+                Vec3 wi_l = frame.to_local(es.wi);
+                Rgb f = bsdf.eval(wo_l, wi_l);
+                // reject directions on inconsistent sides of the geometric vs shading normal
+                bool consistent = (dot(es.wi, hit.ng) * wi_l.z > 0) && (dot(-ray.d, hit.ng) * wo_l.z > 0);
+                if (!f.is_black() && consistent) {
+                    float f_pdf = bsdf.pdf(wo_l, wi_l);
+                    const Medium* m = medium;
+                    if (vol && shape->is_medium_transition()) m = shape->target_medium(hit.ng, es.wi);
+                    Vec3 o = offset_ray_origin(hit.p, hit.ng, es.wi);
+                    float dist = std::isfinite(es.dist) ? length(hit.p + es.wi * es.dist - o) * (1.0f - 1e-4f) : kInf;
+                    Rgb T = shadow_transmittance(o, es.wi, dist, vol ? m : nullptr, sampler);
+                    if (!T.is_black()) {
+                        float light_pdf = es.pdf * sel_pdf;
+                        float w = es.delta ? 1.0f : power_heuristic(light_pdf, f_pdf);
+                        L += throughput() * f * es.Li * T * (w / light_pdf);
+                    }
+                }
+            }
+        }
+
+        BsdfSample bs;
+        if (!bsdf.sample(wo_l, sampler.next_1d(), sampler.next_2d(), &bs)) break;
+        Vec3 wi = frame.to_world(bs.wi);
+        // a sampled direction must leave on the side its lobe intends (geometric normal check)
+        float side = dot(wi, hit.ng) * bs.wi.z;
+        if (!(side > 0)) break;
+        beta *= bs.weight;
+        if (beta.is_black() || !beta.finite()) break;
+        eta_scale *= bs.eta * bs.eta;
+        prev_delta = bs.delta;
+        prev_pdf = bs.pdf;
+        prev_p = hit.p;
+        if (vol && shape->is_medium_transition()) medium = shape->target_medium(hit.ng, wi);
+        ray = Ray(offset_ray_origin(hit.p, hit.ng, wi), wi);
+        ++depth;
+        if (!russian_roulette()) break;
+    }
+    return L;
+}
+
+}  // namespace mf

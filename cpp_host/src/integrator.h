@@ -1,0 +1,33 @@
+// mfhost — unidirectional volumetric path tracer (Mitsuba's `volpath`; `path` ignores media).
+//
+// Next-event estimation to every emitter type, combined with BSDF / phase sampling by the
+// power heuristic; free flights and shadow transmittance are delegated to the current Medium;
+// null-BSDF surfaces are crossed (changing the medium) by both path and shadow rays, any other
+// surface (dielectrics included) blocks shadow rays; Russian roulette from rr_depth.
+#pragma once
+
+#include "sampler.h"
+#include "scene.h"
+
+namespace mf {
+
+class PathIntegrator {
+public:
+    explicit PathIntegrator(const Scene& scene) : scene_(scene) {}
+    /// Radiance along a primary ray starting in `medium`.
+    Rgb Li(Ray ray, const Medium* medium, Sampler& sampler) const;
+    /// Transmittance from `o` along unit `d` over `dist` (may be inf), crossing null surfaces.
+    Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, Sampler& sampler) const;
+
+private:
+    const Scene& scene_;
+};
+
+/// Origin for a ray leaving surface point p with geometric normal ng in direction d.
+inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& d) {
+    float scale = 1.0f + max_comp(vabs(p));
+    float eps = 2e-5f * scale;
+    return dot(d, ng) >= 0 ? p + ng * eps : p - ng * eps;
+}
+
+}  // namespace mf

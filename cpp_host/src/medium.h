@@ -1,0 +1,151 @@
+// mfhost — participating media and phase functions.
+//
+// The integrator is medium-agnostic: it tracks which Medium the current ray segment is in
+// (through the interior/exterior references of the shapes it crosses) and asks that Medium to
+// sample a free flight or a transmittance along [0, t_max] of the segment, where t_max is the
+// distance to the next surface. How the medium does it (analytic, delta/ratio tracking against a
+// majorant, ...) is its own business, so phase 2's macrofacet medium plugs in here:
+//
+//   * its region is "interior of a shape plus the shell out to f = +k·sigma": the host will
+//     register a boundary surface (null BSDF) at that level set, with interior = the macrofacet
+//     medium, instead of the mean surface itself (see Shape::sdf and scene_builder.cpp's hook);
+//   * inside, sigma_t depends on the signed distance f(p) and on the direction relative to
+//     grad f(p): the medium keeps a pointer to its Shape and calls shape->sdf(p) (SdfSample
+//     {f, grad}) at tentative collisions, with a majorant over the segment from the SDF bound
+//     |f(p + t d) − f(p)| <= t (1-Lipschitz), i.e. f_min = f(o) − t_max;
+//   * the phase function may depend on the local frame: MediumInteraction carries `frame_n`
+//     (set by the medium, e.g. to grad f) and PhaseFunction gets the interaction.
+//
+// In phase 1 only `homogeneous` exists; create_macrofacet_medium() is the single hook and fails
+// with "macrofacet media need phase 2".
+#pragma once
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "error.h"
+#include "math.h"
+#include "sampler.h"
+
+namespace mf {
+
+class Medium;
+class Shape;
+
+struct MediumInteraction {
+    Vec3 p;                  // scattering position
+    float t = 0;             // distance along the ray
+    Vec3 wo;                 // direction towards the previous vertex (= -ray.d)
+    Vec3 frame_n{0, 0, 1};   // optional local frame normal for anisotropic phase functions
+    Vec3 frame_t{1, 0, 0};   // optional local tangent (macrofacet media: direction of alpha_u)
+    float sdf_f = 0;         // optional: signed distance at p (macrofacet media)
+    const Medium* medium = nullptr;
+};
+
+class PhaseFunction {
+public:
+    virtual ~PhaseFunction() = default;
+    /// Phase function value p(wo, wi) (1/sr) times any single-scattering colour (RGB).
+    /// wo points back along the incoming ray, wi is the new direction.
+    virtual Rgb eval(const MediumInteraction& mi, const Vec3& wo, const Vec3& wi) const = 0;
+    virtual float pdf(const MediumInteraction& mi, const Vec3& wo, const Vec3& wi) const = 0;
+    /// Sample wi; *weight = eval / pdf. Draws its uniforms from `sampler` (isotropic and HG take
+    /// two, the macrofacet phase MF_PHASE_SAMPLE_DIMENSIONS).
+    virtual bool sample(const MediumInteraction& mi, const Vec3& wo, Sampler& sampler, Vec3* wi, float* pdf,
+                        Rgb* weight) const = 0;
+};
+
+class IsotropicPhase final : public PhaseFunction {
+public:
+    Rgb eval(const MediumInteraction&, const Vec3&, const Vec3&) const override { return Rgb(kInv4Pi); }
+    float pdf(const MediumInteraction&, const Vec3&, const Vec3&) const override { return kInv4Pi; }
+    bool sample(const MediumInteraction&, const Vec3&, Sampler& sampler, Vec3* wi, float* pdf, Rgb* weight) const override;
+};
+
+/// Henyey–Greenstein; g > 0 is forward scattering (wi close to -wo).
+class HenyeyGreenstein final : public PhaseFunction {
+public:
+    explicit HenyeyGreenstein(float g) : g_(g) {}
+    float value(float cos_theta) const;  // cos_theta = dot(-wo, wi)
+    Rgb eval(const MediumInteraction&, const Vec3& wo, const Vec3& wi) const override { return Rgb(value(dot(-wo, wi))); }
+    float pdf(const MediumInteraction&, const Vec3& wo, const Vec3& wi) const override { return value(dot(-wo, wi)); }
+    bool sample(const MediumInteraction&, const Vec3& wo, Sampler& sampler, Vec3* wi, float* pdf, Rgb* weight) const override;
+
+private:
+    float g_;
+};
+
+class Medium {
+public:
+    virtual ~Medium() = default;
+    /// Free-flight sampling along ray (|d| = 1) over [0, t_max] (t_max may be +inf).
+    /// Returns true and fills *mi on a real scattering event; false if the flight passed t_max.
+    ///
+    /// Chromatic media use path-space "hero channel" MIS: the integrator picks `channel` once
+    /// per path; distances are sampled with that channel's extinction. The medium returns
+    ///   *weight    = f / p_channel  per RGB channel (f = sigma_s·T for a scattering event,
+    ///                T for passing), and
+    ///   *pdf_ratio = p_k / p_channel for k = R, G, B (the pdf of the same event had channel k
+    ///                been the hero).
+    /// The integrator multiplies both along the path and divides the throughput by the average
+    /// of the pdf-ratio product (one-sample balance heuristic over the hero choice), which keeps
+    /// weights bounded. Grey media (e.g. the macrofacet medium) return pdf_ratio = 1.
+    virtual bool sample_free_flight(const Ray& ray, float t_max, int channel, Sampler& sampler, MediumInteraction* mi,
+                                    Rgb* weight, Rgb* pdf_ratio) const = 0;
+    /// Transmittance (or an unbiased estimate of it) over [0, t_max].
+    virtual Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const = 0;
+    virtual const PhaseFunction& phase() const = 0;
+    virtual std::string name() const = 0;
+};
+
+class HomogeneousMedium final : public Medium {
+public:
+    HomogeneousMedium(const Rgb& sigma_t, const Rgb& albedo, std::shared_ptr<PhaseFunction> phase)
+        : sigma_t_(sigma_t), albedo_(albedo), phase_(std::move(phase)) {}
+    /// Exponential free flights with the hero channel's sigma_t (see Medium); exact
+    /// (weight = albedo) for grey media. For a homogeneous medium this is what delta tracking
+    /// with majorant = sigma_t reduces to.
+    bool sample_free_flight(const Ray& ray, float t_max, int channel, Sampler& sampler, MediumInteraction* mi,
+                            Rgb* weight, Rgb* pdf_ratio) const override;
+    Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const override;
+    const PhaseFunction& phase() const override { return *phase_; }
+    std::string name() const override { return "homogeneous"; }
+    const Rgb& sigma_t() const { return sigma_t_; }
+    const Rgb& albedo() const { return albedo_; }
+
+private:
+    Rgb sigma_t_, albedo_;
+    std::shared_ptr<PhaseFunction> phase_;
+};
+
+/// A parameter of a plugin that mfrender does not interpret itself (macrofacet media): kept
+/// verbatim so it can be handed to the Rust library's mf_params_* C API in phase 2.
+struct ParamValue {
+    enum class Kind { Float, Rgb, String, Int, Bool } kind = Kind::Float;
+    double f = 0;
+    Rgb rgb;
+    std::string s;
+    long long i = 0;
+    bool b = false;
+    SourceLoc loc;
+};
+
+struct MediumParamBag {
+    std::string type;  // "macrofacet" or "gpis"
+    std::string id;
+    SourceLoc loc;     // of the <medium> element
+    std::vector<std::pair<std::string, ParamValue>> params;  // in document order
+    const ParamValue* get(const std::string& name) const {
+        for (const auto& kv : params)
+            if (kv.first == name) return &kv.second;
+        return nullptr;
+    }
+};
+
+/// THE phase-2 hook: build the macrofacet medium of `shape` from its parameter bag.
+/// Phase 1 always throws mf::Error("... macrofacet media need phase 2").
+std::shared_ptr<Medium> create_macrofacet_medium(const MediumParamBag& bag, const std::shared_ptr<const Shape>& shape);
+
+}  // namespace mf

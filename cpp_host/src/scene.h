@@ -1,0 +1,76 @@
+// mfhost — the renderable scene: shapes in an Embree BVH, emitters, camera and settings.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "emitter.h"
+#include "medium.h"
+#include "shape.h"
+
+namespace mf {
+
+/// Mitsuba `perspective` sensor: local frame looks down +z with +x to the left of the image
+/// and +y up; fov measured along fov_axis (x, y, diagonal, smaller, larger).
+struct Camera {
+    Mat4 to_world;
+    float tan_half_x = 0.5f, tan_half_y = 0.5f;
+    float near_clip = 1e-2f, far_clip = 1e4f;
+    int width = 768, height = 576;
+    /// Primary ray through film position (fx, fy) in pixels (0..width, 0..height).
+    Ray generate_ray(float fx, float fy) const;
+};
+
+struct IntegratorSettings {
+    bool volumetric = true;  // volpath (media) or path (media ignored)
+    int max_depth = -1;      // -1 = unbounded
+    int rr_depth = 5;
+    bool hide_emitters = false;
+};
+
+struct SceneSummary {
+    size_t shapes = 0, triangles = 0, emitters = 0, media = 0;
+};
+
+class Scene {
+public:
+    Scene();
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    void add_shape(std::shared_ptr<Shape> s);
+    void add_emitter(std::shared_ptr<Emitter> e);
+    /// Build the BVH. Must be called once after all shapes are added.
+    void commit();
+
+    /// Closest hit with t in (ray.tmin, ray.tmax).
+    bool intersect(const Ray& ray, SurfaceHit* hit) const;
+
+    const std::vector<std::shared_ptr<Shape>>& shapes() const { return shapes_; }
+    const std::vector<std::shared_ptr<Emitter>>& emitters() const { return emitters_; }
+    const std::vector<const Emitter*>& infinite_emitters() const { return infinite_; }
+    const Aabb& bounds() const { return bounds_; }
+    SceneSummary summary() const;
+
+    Camera camera;
+    std::shared_ptr<const Medium> camera_medium;
+    IntegratorSettings integrator;
+    int spp = 16;
+    uint64_t seed = 0;
+    std::vector<std::shared_ptr<const Medium>> media;  // keeps media alive
+
+private:
+    RTCDevice device_ = nullptr;
+    RTCScene scene_ = nullptr;
+    std::vector<std::shared_ptr<Shape>> shapes_;
+    std::vector<const Shape*> by_geom_id_;
+    std::vector<std::shared_ptr<Emitter>> emitters_;
+    std::vector<const Emitter*> infinite_;
+    Aabb bounds_;
+};
+
+}  // namespace mf

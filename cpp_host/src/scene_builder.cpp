@@ -1,0 +1,552 @@
+// mfhost — scene construction from the XML tree (see scene_builder.h).
+#include "scene_builder.h"
+
+#include <sys/stat.h>
+
+#include <map>
+
+#include "image_io.h"
+
+namespace mf {
+
+namespace {
+
+bool file_exists(const std::string& p) {
+    struct stat st;
+    return ::stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+class Builder {
+public:
+    Builder(const BuildOptions& opts, BuildReport* report) : opts_(opts), report_(report) {}
+
+    std::unique_ptr<Scene> build(const ParsedScene& parsed) {
+        scene_ = std::make_unique<Scene>();
+        const SceneObject& root = *parsed.root;
+        const SceneObject* sensor = nullptr;
+        const SceneObject* integrator = nullptr;
+        for (const Child& c : root.children) {
+            c.used = true;
+            const SceneObject& o = *c.obj;
+            if (o.tag == "shape") {
+                build_shape(c.obj);
+            } else if (o.tag == "emitter") {
+                if (o.type == "area")
+                    throw Error(o.loc, o.describe() + ": an area emitter must be nested inside a <shape>");
+                scene_->add_emitter(build_emitter(o, nullptr));
+            } else if (o.tag == "bsdf") {
+                build_bsdf(o);
+            } else if (o.tag == "medium") {
+                build_medium(o);
+            } else if (o.tag == "sensor") {
+                if (sensor) throw Error(o.loc, "only one <sensor> is supported (first at " + sensor->loc.str() + ")");
+                sensor = &o;
+            } else if (o.tag == "integrator") {
+                if (integrator)
+                    throw Error(o.loc, "only one <integrator> is supported (first at " + integrator->loc.str() + ")");
+                integrator = &o;
+            } else {
+                throw Error(o.loc, o.describe() + " is not allowed at the top level of <scene>");
+            }
+        }
+        if (!sensor) throw Error(root.loc, "the scene has no <sensor> (mfrender needs a perspective sensor)");
+        build_sensor(*sensor);
+        if (integrator) build_integrator(*integrator);
+        else scene_->integrator = IntegratorSettings{false, -1, 5, false};  // Mitsuba's default: path
+        if (opts_.spp_override > 0) scene_->spp = opts_.spp_override;
+        if (opts_.seed_override >= 0) scene_->seed = uint64_t(opts_.seed_override);
+        if (opts_.max_depth_override >= -1) scene_->integrator.max_depth = opts_.max_depth_override;
+        for (auto& kv : media_) scene_->media.push_back(kv.second);
+        scene_->commit();
+        return std::move(scene_);
+    }
+
+private:
+    const BuildOptions& opts_;
+    BuildReport* report_;
+    std::unique_ptr<Scene> scene_;
+    std::map<const SceneObject*, std::shared_ptr<Bsdf>> bsdfs_;
+    std::map<const SceneObject*, std::shared_ptr<const Medium>> media_;
+    std::map<const SceneObject*, std::shared_ptr<const MediumParamBag>> bags_;
+
+    static Error err(const SceneObject& o, const std::string& msg) { return Error(o.loc, o.describe() + ": " + msg); }
+    static Error perr(const SceneObject& o, const std::string& prop, const std::string& msg) {
+        return Error(o.loc_of(prop), o.describe() + ": parameter \"" + prop + "\" " + msg);
+    }
+
+    std::string resolve_file(const SceneObject& o, const std::string& prop) {
+        std::string f = o.get_string(prop);
+        std::string path = (f.empty() || f[0] == '/' || o.dir == ".") ? f : o.dir + "/" + f;
+        if (!file_exists(path)) throw perr(o, prop, "refers to a missing file \"" + path + "\"");
+        return path;
+    }
+
+    Rgb nonneg_rgb(const SceneObject& o, const std::string& name, const Rgb& def) {
+        Rgb v = o.get_rgb(name, def);
+        if (!v.finite() || v.r < 0 || v.g < 0 || v.b < 0) throw perr(o, name, "must be finite and non-negative");
+        return v;
+    }
+
+    // ------------------------------------------------------------------ BSDFs
+    std::shared_ptr<Bsdf> build_bsdf(const SceneObject& o) {
+        auto it = bsdfs_.find(&o);
+        if (it != bsdfs_.end()) return it->second;
+        std::shared_ptr<Bsdf> b;
+        const std::string& t = o.type;
+        if (t == "diffuse") {
+            b = make_diffuse(nonneg_rgb(o, "reflectance", Rgb(0.5f)));
+        } else if (t == "conductor" || t == "roughconductor") {
+            ConductorIor ior = conductor_ior(o);
+            Rgb spec = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f));
+            if (t == "conductor") {
+                b = make_conductor(ior, spec);
+            } else {
+                std::string dist = o.get_string("distribution", "beckmann");
+                MicrofacetType mt;
+                if (dist == "beckmann") mt = MicrofacetType::Beckmann;
+                else if (dist == "ggx") mt = MicrofacetType::GGX;
+                else throw perr(o, "distribution", "must be \"beckmann\" or \"ggx\", got \"" + dist + "\"");
+                float au, av;
+                if (o.has("alpha_u") || o.has("alpha_v")) {
+                    if (o.has("alpha")) throw err(o, "specify either alpha or alpha_u/alpha_v, not both");
+                    if (!o.has("alpha_u") || !o.has("alpha_v")) throw err(o, "alpha_u and alpha_v must both be given");
+                    au = roughness(o, "alpha_u");
+                    av = roughness(o, "alpha_v");
+                } else {
+                    au = av = o.has("alpha") ? roughness(o, "alpha") : 0.1f;
+                }
+                bool vis = o.get_bool("sample_visible", true);
+                b = make_rough_conductor(ior, spec, mt, au, av, vis);
+            }
+        } else if (t == "dielectric") {
+            float ni = ior_value(o, "int_ior", "bk7"), ne = ior_value(o, "ext_ior", "air");
+            b = make_dielectric(ni, ne, nonneg_rgb(o, "specular_reflectance", Rgb(1.0f)),
+                                nonneg_rgb(o, "specular_transmittance", Rgb(1.0f)));
+        } else if (t == "null") {
+            b = make_null_bsdf();
+        } else if (t == "twosided") {
+            auto kids = o.children_with_tag("bsdf");
+            if (kids.empty() || kids.size() > 2) throw err(o, "expects one or two nested <bsdf> elements");
+            std::shared_ptr<Bsdf> f = build_bsdf(*kids[0]->obj);
+            std::shared_ptr<Bsdf> bk = kids.size() == 2 ? build_bsdf(*kids[1]->obj) : f;
+            if (f->is_null() || bk->is_null()) throw err(o, "a null BSDF cannot be made two-sided");
+            b = make_twosided(f, bk);
+        } else {
+            throw err(o, "unsupported BSDF plugin \"" + t +
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, null, twosided)");
+        }
+        o.check_all_used();
+        bsdfs_[&o] = b;
+        return b;
+    }
+
+    float roughness(const SceneObject& o, const std::string& name) {
+        float a = o.get_float(name);
+        if (!(a >= 0)) throw perr(o, name, "must be a non-negative roughness, got " + std::to_string(a));
+        return a;
+    }
+
+    ConductorIor conductor_ior(const SceneObject& o) {
+        ConductorIor ior;
+        if (o.has("eta") || o.has("k")) {
+            if (o.has("material")) throw err(o, "specify either material or eta/k, not both");
+            ior.eta = o.get_rgb("eta", Rgb(0.0f));
+            ior.k = o.get_rgb("k", Rgb(1.0f));
+            if (!ior.eta.finite() || !ior.k.finite() || ior.eta.r < 0 || ior.eta.g < 0 || ior.eta.b < 0 || ior.k.r < 0 ||
+                ior.k.g < 0 || ior.k.b < 0)
+                throw err(o, "eta and k must be finite and non-negative");
+            ior.perfect = false;
+            return ior;
+        }
+        std::string mat = o.get_string("material", "none");
+        if (!conductor_preset(mat, &ior))
+            throw perr(o, "material", "names an unknown conductor \"" + mat + "\" (supported: " + conductor_preset_list() + ")");
+        return ior;
+    }
+
+    float ior_value(const SceneObject& o, const std::string& name, const std::string& def) {
+        const Property* p = o.find(name);
+        float v;
+        if (!p) {
+            dielectric_ior_by_name(def, &v);
+            return v;
+        }
+        if (p->type == PropType::String) {
+            if (!dielectric_ior_by_name(p->s, &v))
+                throw perr(o, name, "names an unknown material \"" + p->s + "\" (e.g. vacuum, air, water, bk7, diamond)");
+            return v;
+        }
+        v = o.get_float(name, 1.0f);
+        if (!(v > 0)) throw perr(o, name, "must be a positive index of refraction");
+        return v;
+    }
+
+    // ------------------------------------------------------------------ media
+    std::shared_ptr<PhaseFunction> build_phase(const SceneObject& o) {
+        std::shared_ptr<PhaseFunction> ph;
+        if (o.type == "isotropic") {
+            ph = std::make_shared<IsotropicPhase>();
+        } else if (o.type == "hg") {
+            float g = o.get_float("g", 0.8f);
+            if (!(g > -1 && g < 1)) throw perr(o, "g", "must lie in (-1, 1)");
+            ph = std::make_shared<HenyeyGreenstein>(g);
+        } else {
+            throw err(o, "unsupported phase function \"" + o.type + "\" (supported: isotropic, hg)");
+        }
+        o.check_all_used();
+        return ph;
+    }
+
+    static bool is_macrofacet(const SceneObject& o) { return o.type == "macrofacet" || o.type == "gpis"; }
+
+    std::shared_ptr<const MediumParamBag> build_bag(const SceneObject& o) {
+        auto it = bags_.find(&o);
+        if (it != bags_.end()) return it->second;
+        auto bag = std::make_shared<MediumParamBag>();
+        bag->type = o.type;
+        bag->id = o.id;
+        bag->loc = o.loc;
+        for (const Property& p : o.props) {
+            p.used = true;
+            ParamValue v;
+            v.loc = p.loc;
+            switch (p.type) {
+                case PropType::Float:
+                    v.kind = ParamValue::Kind::Float;
+                    v.f = p.f;
+                    break;
+                case PropType::Integer:
+                    v.kind = ParamValue::Kind::Int;
+                    v.i = p.i;
+                    break;
+                case PropType::Boolean:
+                    v.kind = ParamValue::Kind::Bool;
+                    v.b = p.b;
+                    break;
+                case PropType::String:
+                    v.kind = ParamValue::Kind::String;
+                    v.s = p.s;
+                    break;
+                case PropType::Rgb:
+                    v.kind = ParamValue::Kind::Rgb;
+                    v.rgb = p.rgb;
+                    break;
+                default:
+                    throw Error(p.loc, o.describe() + ": parameter \"" + p.name + "\" has type " + prop_type_name(p.type) +
+                                           ", which a macrofacet parameter bag cannot hold (float, rgb, string, "
+                                           "integer or boolean)");
+            }
+            bag->params.emplace_back(p.name, v);
+        }
+        o.check_all_used();  // nested objects are not allowed in the bag
+        bags_[&o] = bag;
+        return bag;
+    }
+
+    std::shared_ptr<const Medium> build_medium(const SceneObject& o) {
+        if (is_macrofacet(o)) {
+            build_bag(o);
+            return nullptr;
+        }
+        auto it = media_.find(&o);
+        if (it != media_.end()) return it->second;
+        if (o.type != "homogeneous")
+            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous; macrofacet/gpis in phase 2)");
+        Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
+        Rgb albedo = nonneg_rgb(o, "albedo", Rgb(0.75f));
+        if (albedo.max() > 1.0f) throw perr(o, "albedo", "must lie in [0, 1]");
+        float scale = o.get_float("scale", 1.0f);
+        if (!(scale >= 0)) throw perr(o, "scale", "must be non-negative");
+        o.get_bool("sample_emitters", true);  // accepted; next-event estimation is always used
+        auto phases = o.children_with_tag("phase");
+        if (phases.size() > 1) throw err(o, "expects at most one nested <phase>");
+        std::shared_ptr<PhaseFunction> ph =
+            phases.empty() ? std::make_shared<IsotropicPhase>() : build_phase(*phases[0]->obj);
+        o.check_all_used();
+        auto m = std::make_shared<HomogeneousMedium>(sigma_t * scale, albedo, ph);
+        media_[&o] = m;
+        return m;
+    }
+
+    // ------------------------------------------------------------------ shapes
+    void build_shape(const std::shared_ptr<SceneObject>& op) {
+        const SceneObject& o = *op;
+        const std::string& t = o.type;
+        Mat4 to_world = o.get_transform("to_world", Mat4());
+        if (std::fabs(to_world.det3()) < 1e-30) throw perr(o, "to_world", "is singular");
+        bool flip = o.get_bool("flip_normals", false);
+        std::shared_ptr<Shape> shape;
+        if (t == "obj" || t == "ply") {
+            std::string path = resolve_file(o, "filename");
+            bool face_normals = o.get_bool("face_normals", false);
+            if (t == "obj") o.get_bool("flip_tex_coords", true);  // accepted, no textures
+            TriMesh m;
+            try {
+                m = t == "obj" ? load_obj(path) : load_ply(path);
+            } catch (const Error& e) {
+                throw Error(o.loc, o.describe() + ": " + e.what());
+            }
+            if (face_normals) m.make_face_normals();
+            m.transform(to_world);
+            if (!face_normals && m.n.empty()) m.compute_vertex_normals();
+            if (flip) m.flip_normals();
+            shape = std::make_shared<MeshShape>(std::move(m), t);
+        } else if (t == "sphere") {
+            Vec3 c = o.get_point("center", Vec3(0.0f));
+            float r = o.get_float("radius", 1.0f);
+            if (!(r > 0)) throw perr(o, "radius", "must be positive");
+            double s = to_world.similarity_scale(1e-4);
+            if (s < 0) throw perr(o, "to_world", "of a sphere must be a similarity (rotation, uniform scale, translation)");
+            shape = std::make_shared<SphereShape>(to_world.point(c), float(r * s), flip);
+        } else if (t == "rectangle" || t == "cube" || t == "disk") {
+            TriMesh m = t == "rectangle" ? make_rectangle_mesh() : (t == "cube" ? make_cube_mesh() : make_disk_mesh());
+            m.transform(to_world);
+            if (flip) m.flip_normals();
+            auto ms = std::make_shared<MeshShape>(std::move(m), t);
+            double s = to_world.similarity_scale(1e-4);
+            if (s > 0) {
+                Mat4 inv = to_world.inverse();
+                SdfSample (*local)(const Vec3&) =
+                    t == "rectangle" ? sdf_rectangle_local : (t == "cube" ? sdf_cube_local : sdf_disk_local);
+                float fs = float(s);
+                float sign = flip ? -1.0f : 1.0f;
+                ms->set_analytic_sdf([=](const Vec3& p) {
+                    SdfSample l = local(inv.point(p));
+                    SdfSample w;
+                    w.f = sign * l.f * fs;
+                    w.grad = normalize(to_world.vector(l.grad)) * sign;
+                    return w;
+                });
+            }
+            shape = ms;
+        } else {
+            throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, sphere, rectangle, cube, disk)");
+        }
+        shape->id = o.id;
+        shape->loc = o.loc;
+
+        auto bsdfs = o.children_with_tag("bsdf");
+        if (bsdfs.size() > 1) throw err(o, "has more than one BSDF");
+        shape->bsdf = bsdfs.empty() ? make_diffuse(Rgb(0.5f)) : build_bsdf(*bsdfs[0]->obj);
+
+        std::shared_ptr<const MediumParamBag> mf_bag[2];
+        for (const Child* c : o.children_with_tag("medium")) {
+            if (c->name != "interior" && c->name != "exterior")
+                throw Error(c->loc, o.describe() + ": a medium inside a shape needs name=\"interior\" or name=\"exterior\"");
+            bool interior = c->name == "interior";
+            if ((interior && (shape->interior || shape->interior_bag)) || (!interior && (shape->exterior || shape->exterior_bag)))
+                throw Error(c->loc, o.describe() + ": more than one " + c->name + " medium");
+            if (is_macrofacet(*c->obj)) {
+                auto bag = build_bag(*c->obj);
+                (interior ? shape->interior_bag : shape->exterior_bag) = bag;
+                mf_bag[interior ? 0 : 1] = bag;
+            } else {
+                (interior ? shape->interior : shape->exterior) = build_medium(*c->obj);
+            }
+        }
+        auto ems = o.children_with_tag("emitter");
+        if (ems.size() > 1) throw err(o, "has more than one emitter");
+        std::shared_ptr<Emitter> em;
+        if (!ems.empty()) {
+            const SceneObject& eo = *ems[0]->obj;
+            if (eo.type != "area") throw Error(eo.loc, eo.describe() + ": only area emitters can be attached to a shape");
+            em = build_emitter(eo, shape.get());
+            shape->emitter = em.get();
+        }
+        o.check_all_used();
+
+        for (int k = 0; k < 2; ++k) {
+            if (!mf_bag[k]) continue;
+            const char* role = k == 0 ? "interior" : "exterior";
+            if (report_) report_->macrofacet.push_back({mf_bag[k], shape, role});
+            if (!opts_.allow_macrofacet_placeholders) {
+                std::shared_ptr<const Medium> m = create_macrofacet_medium(*mf_bag[k], shape);  // phase 2 hook
+                (k == 0 ? shape->interior : shape->exterior) = m;
+                scene_->media.push_back(m);
+            }
+        }
+        scene_->add_shape(shape);
+        if (em) scene_->add_emitter(em);
+    }
+
+    // ------------------------------------------------------------------ emitters
+    std::shared_ptr<Emitter> build_emitter(const SceneObject& o, const Shape* shape) {
+        std::shared_ptr<Emitter> e;
+        const std::string& t = o.type;
+        if (t == "area") {
+            if (!o.has("radiance")) throw err(o, "missing required parameter \"radiance\"");
+            e = std::make_shared<AreaEmitter>(shape, nonneg_rgb(o, "radiance", Rgb(1.0f)));
+        } else if (t == "point") {
+            Vec3 p(0.0f);
+            if (o.has("position") && o.has("to_world")) throw err(o, "specify either position or to_world, not both");
+            if (o.has("position")) p = o.get_point("position", p);
+            else p = o.get_transform("to_world", Mat4()).point(Vec3(0.0f));
+            e = std::make_shared<PointEmitter>(p, nonneg_rgb(o, "intensity", Rgb(1.0f)));
+        } else if (t == "directional") {
+            Vec3 d(0, 0, 1);
+            if (o.has("direction") && o.has("to_world")) throw err(o, "specify either direction or to_world, not both");
+            if (o.has("direction")) d = o.get_vector("direction", d);
+            else d = o.get_transform("to_world", Mat4()).vector(Vec3(0, 0, 1));
+            if (!(length(d) > 0)) throw perr(o, "direction", "must be non-zero");
+            e = std::make_shared<DirectionalEmitter>(d, nonneg_rgb(o, "irradiance", Rgb(1.0f)));
+        } else if (t == "constant") {
+            e = std::make_shared<ConstantEmitter>(nonneg_rgb(o, "radiance", Rgb(1.0f)));
+        } else if (t == "envmap") {
+            std::string path = resolve_file(o, "filename");
+            float scale = o.get_float("scale", 1.0f);
+            if (!(scale >= 0)) throw perr(o, "scale", "must be non-negative");
+            Mat4 tw = o.get_transform("to_world", Mat4());
+            Image img;
+            try {
+                img = read_exr(path);
+            } catch (const Error& ex) {
+                throw Error(o.loc, o.describe() + ": " + ex.what());
+            }
+            for (float v : img.rgb)
+                if (v < 0) throw err(o, "environment map \"" + path + "\" has negative pixel values");
+            e = std::make_shared<EnvmapEmitter>(std::move(img.rgb), img.width, img.height, scale, tw);
+        } else {
+            throw err(o, "unsupported emitter plugin \"" + t + "\" (supported: area, point, directional, constant, envmap)");
+        }
+        o.check_all_used();
+        return e;
+    }
+
+    // ------------------------------------------------------------------ sensor & integrator
+    void build_sensor(const SceneObject& o) {
+        if (o.type != "perspective") throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective)");
+        Camera& cam = scene_->camera;
+        cam.to_world = o.get_transform("to_world", Mat4());
+        if (!o.has("fov")) throw err(o, "missing required parameter \"fov\" (focal_length is not supported)");
+        float fov = o.get_float("fov");
+        if (!(fov > 0 && fov < 180)) throw perr(o, "fov", "must lie in (0, 180) degrees");
+        std::string axis = o.get_string("fov_axis", "x");
+        cam.near_clip = o.get_float("near_clip", 1e-2f);
+        cam.far_clip = o.get_float("far_clip", 1e4f);
+        if (!(cam.near_clip > 0 && cam.far_clip > cam.near_clip)) throw err(o, "needs 0 < near_clip < far_clip");
+
+        auto films = o.children_with_tag("film");
+        if (films.size() > 1) throw err(o, "has more than one film");
+        if (!films.empty()) {
+            const SceneObject& f = *films[0]->obj;
+            if (f.type != "hdrfilm") throw Error(f.loc, f.describe() + ": unsupported film plugin (supported: hdrfilm)");
+            long long w = f.get_int("width", 768), h = f.get_int("height", 576);
+            if (w <= 0 || h <= 0 || w > 65536 || h > 65536) throw Error(f.loc, f.describe() + ": invalid film size");
+            cam.width = int(w);
+            cam.height = int(h);
+            // accepted for compatibility; output is always float32 RGB OpenEXR
+            std::string pf = f.get_string("pixel_format", "rgb");
+            if (pf != "rgb" && pf != "rgba")
+                throw perr(f, "pixel_format", "must be rgb or rgba (output is always RGB), got \"" + pf + "\"");
+            f.get_string("component_format", "float32");
+            std::string ff = f.get_string("file_format", "openexr");
+            if (ff != "openexr" && ff != "exr") throw perr(f, "file_format", "must be openexr");
+            f.get_bool("sample_border", false);
+            auto rf = f.children_with_tag("rfilter");
+            if (rf.size() > 1) throw Error(f.loc, f.describe() + ": more than one rfilter");
+            if (!rf.empty()) {
+                const SceneObject& r = *rf[0]->obj;
+                if (r.type == "gaussian") r.get_float("stddev", 0.5f);  // rendered as a box filter
+                else if (r.type != "box")
+                    throw Error(r.loc, r.describe() + ": unsupported reconstruction filter (supported: box, gaussian=box)");
+                r.check_all_used();
+            }
+            f.check_all_used();
+        }
+        float aspect = float(cam.width) / float(cam.height);
+        float t = std::tan(0.5f * fov * kPi / 180.0f);
+        if (axis == "smaller") axis = cam.width <= cam.height ? "x" : "y";
+        if (axis == "larger") axis = cam.width >= cam.height ? "x" : "y";
+        if (axis == "x") {
+            cam.tan_half_x = t;
+            cam.tan_half_y = t / aspect;
+        } else if (axis == "y") {
+            cam.tan_half_y = t;
+            cam.tan_half_x = t * aspect;
+        } else if (axis == "diagonal") {
+            float diag = std::sqrt(aspect * aspect + 1.0f);
+            cam.tan_half_x = t * aspect / diag;
+            cam.tan_half_y = t / diag;
+        } else {
+            throw perr(o, "fov_axis", "must be x, y, diagonal, smaller or larger");
+        }
+        auto samplers = o.children_with_tag("sampler");
+        if (samplers.size() > 1) throw err(o, "has more than one sampler");
+        if (!samplers.empty()) {
+            const SceneObject& s = *samplers[0]->obj;
+            if (s.type != "independent")
+                throw Error(s.loc, s.describe() + ": unsupported sampler plugin (supported: independent)");
+            long long spp = s.get_int("sample_count", 4);
+            if (spp <= 0) throw perr(s, "sample_count", "must be positive");
+            scene_->spp = int(std::min<long long>(spp, 1 << 24));
+            long long seed = s.get_int("seed", 0);
+            scene_->seed = uint64_t(seed);
+            s.check_all_used();
+        } else {
+            scene_->spp = 4;
+        }
+        auto meds = o.children_with_tag("medium");
+        if (meds.size() > 1) throw err(o, "has more than one medium");
+        if (!meds.empty()) {
+            if (is_macrofacet(*meds[0]->obj))
+                throw Error(meds[0]->loc, o.describe() + ": a sensor cannot be inside a macrofacet medium");
+            scene_->camera_medium = build_medium(*meds[0]->obj);
+        }
+        o.check_all_used();
+    }
+
+    void build_integrator(const SceneObject& o) {
+        IntegratorSettings s;
+        if (o.type == "volpath") s.volumetric = true;
+        else if (o.type == "path") s.volumetric = false;
+        else throw err(o, "unsupported integrator plugin \"" + o.type + "\" (supported: volpath, path)");
+        long long md = o.get_int("max_depth", -1);
+        if (md < -1) throw perr(o, "max_depth", "must be -1 (unbounded) or >= 0");
+        long long rr = o.get_int("rr_depth", 5);
+        if (rr < 0) throw perr(o, "rr_depth", "must be >= 0");
+        s.max_depth = int(std::min<long long>(md, 1 << 20));
+        s.rr_depth = int(std::min<long long>(rr, 1 << 20));
+        s.hide_emitters = o.get_bool("hide_emitters", false);
+        o.check_all_used();
+        scene_->integrator = s;
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report) {
+    Builder b(opts, report);
+    return b.build(parsed);
+}
+
+const char* supported_subset_text() {
+    return R"(Supported Mitsuba 3 XML subset (<scene version="3.x.x">):
+  structure   <default name value>, $name substitution, -D name=value, <include filename>,
+              id="..." and <ref id="..."/> / <ref name="..." id="..."/>
+  properties  integer float boolean string rgb vector point transform
+              spectrum (a single constant value only -> grey RGB)
+  transforms  translate (x,y,z | value), rotate (axis x,y,z | value + angle in degrees),
+              scale (value | x,y,z), matrix (16 values, row-major), lookat (origin,target,up);
+              each operation is applied after the previous ones (Mitsuba's order)
+  shapes      obj, ply (ascii / binary_little_endian), sphere (center, radius), rectangle,
+              cube, disk; to_world, flip_normals, face_normals (obj/ply); nested bsdf,
+              area emitter, <medium name="interior|exterior">
+  bsdfs       diffuse (reflectance), conductor (material | eta,k; specular_reflectance),
+              roughconductor (distribution beckmann|ggx, alpha | alpha_u,alpha_v, material |
+              eta,k, sample_visible), dielectric (int_ior, ext_ior: number or name),
+              null, twosided (one or two nested bsdfs)
+              conductor materials: none, Ag, Al, Au, Cr, Cu
+  media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
+              macrofacet / gpis: parsed into a parameter bag, rendering needs phase 2
+  emitters    area (radiance), point (position | to_world, intensity), directional
+              (direction | to_world, irradiance), constant (radiance),
+              envmap (filename: lat-long OpenEXR, scale, to_world)
+  sensor      perspective (fov, fov_axis, to_world, near_clip, far_clip) with
+              hdrfilm (width, height, rfilter box | gaussian [rendered as box]) and
+              independent sampler (sample_count, seed)
+  integrators volpath, path (max_depth, rr_depth, hide_emitters)
+Unknown elements, plugin types or parameters are errors.
+)";
+}
+
+}  // namespace mf

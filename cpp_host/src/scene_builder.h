@@ -1,0 +1,39 @@
+// mfhost — turns the parsed Mitsuba XML tree into a renderable Scene, validating every plugin
+// type, parameter name, type and value (errors name the element and its file:line).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "medium.h"
+#include "scene.h"
+#include "xml_scene.h"
+
+namespace mf {
+
+struct BuildOptions {
+    /// Build everything but do not call the macrofacet hook (for --check and tests): shapes keep
+    /// their parameter bags and no medium object; the scene must not be rendered then.
+    bool allow_macrofacet_placeholders = false;
+    int spp_override = -1;
+    long long seed_override = -1;
+    int max_depth_override = -2;  // -2 = keep the scene's value
+};
+
+struct BuildReport {
+    /// Every macrofacet/gpis medium reference, with the shape it is attached to.
+    struct MacrofacetUse {
+        std::shared_ptr<const MediumParamBag> bag;
+        std::shared_ptr<const Shape> shape;
+        std::string role;  // "interior" or "exterior"
+    };
+    std::vector<MacrofacetUse> macrofacet;
+};
+
+std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report);
+
+/// The plugin subset, as printed by `mfrender --help`.
+const char* supported_subset_text();
+
+}  // namespace mf

@@ -1,0 +1,299 @@
+// mfhost — shapes (see shape.h).
+#include "shape.h"
+
+namespace mf {
+
+// ----------------------------------------------------------------------------------------------
+// MeshShape
+
+MeshShape::MeshShape(TriMesh mesh, std::string kind) : mesh_(std::move(mesh)), kind_(std::move(kind)) {
+    for (const Vec3& q : mesh_.p) bounds_.expand(q);
+    cdf_.resize(mesh_.num_triangles());
+    double acc = 0;
+    for (size_t t = 0; t < mesh_.num_triangles(); ++t) {
+        const Vec3& a = mesh_.p[mesh_.idx[3 * t]];
+        const Vec3& b = mesh_.p[mesh_.idx[3 * t + 1]];
+        const Vec3& c = mesh_.p[mesh_.idx[3 * t + 2]];
+        acc += 0.5 * double(length(cross(b - a, c - a)));
+        cdf_[t] = float(acc);
+    }
+    area_ = float(acc);
+}
+
+const MeshSdf& MeshShape::mesh_sdf() const {
+    std::call_once(sdf_once_, [this] { sdf_ = std::make_unique<MeshSdf>(mesh_.p, mesh_.idx); });
+    return *sdf_;
+}
+
+SdfSample MeshShape::sdf(const Vec3& p) const {
+    if (analytic_) return analytic_(p);
+    return mesh_sdf().eval(p);
+}
+
+SdfSample MeshShape::sdf_frame(const Vec3& p, Vec3* frame_normal) const {
+    if (analytic_) {
+        SdfSample s = analytic_(p);
+        *frame_normal = s.grad;
+        return s;
+    }
+    SdfSample s = mesh_sdf().eval(p, frame_normal);
+    // Far from the surface (outside the mean surface's neighbourhood) the two agree anyway;
+    // never let the smooth normal point against the side the point is on.
+    if (!(dot(*frame_normal, s.grad) > -0.5f)) *frame_normal = s.grad;
+    return s;
+}
+
+void MeshShape::sample_position(const Vec2& u, Vec3* p, Vec3* n) const {
+    float target = u.x * area_;
+    size_t t = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin());
+    if (t >= cdf_.size()) t = cdf_.size() - 1;
+    float lo = t > 0 ? cdf_[t - 1] : 0.0f;
+    float w = cdf_[t] - lo;
+    float ux = w > 0 ? std::clamp((target - lo) / w, 0.0f, 1.0f) : 0.5f;
+    float su = std::sqrt(ux);
+    float b1 = 1.0f - su, b2 = u.y * su;
+    const Vec3& a = mesh_.p[mesh_.idx[3 * t]];
+    const Vec3& b = mesh_.p[mesh_.idx[3 * t + 1]];
+    const Vec3& c = mesh_.p[mesh_.idx[3 * t + 2]];
+    *p = a * (1.0f - b1 - b2) + b * b1 + c * b2;
+    *n = normalize(cross(b - a, c - a));
+}
+
+unsigned MeshShape::attach(RTCDevice device, RTCScene scene) const {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float* vb = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh_.p.size()));
+    for (size_t i = 0; i < mesh_.p.size(); ++i) {
+        vb[3 * i] = mesh_.p[i].x;
+        vb[3 * i + 1] = mesh_.p[i].y;
+        vb[3 * i + 2] = mesh_.p[i].z;
+    }
+    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                  3 * sizeof(unsigned), mesh_.num_triangles()));
+    for (size_t i = 0; i < mesh_.idx.size(); ++i) ib[i] = mesh_.idx[i];
+    rtcCommitGeometry(g);
+    unsigned id = rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    return id;
+}
+
+void MeshShape::fill_hit(const Ray& ray, float t, unsigned prim, float u, float v, SurfaceHit* hit) const {
+    uint32_t i0 = mesh_.idx[3 * prim], i1 = mesh_.idx[3 * prim + 1], i2 = mesh_.idx[3 * prim + 2];
+    const Vec3& a = mesh_.p[i0];
+    const Vec3& b = mesh_.p[i1];
+    const Vec3& c = mesh_.p[i2];
+    hit->t = t;
+    // Barycentric position is more accurate than o + t d for the spawn point.
+    hit->p = a * (1.0f - u - v) + b * u + c * v;
+    if (!all_finite(hit->p)) hit->p = ray.at(t);
+    hit->ng = normalize(cross(b - a, c - a));
+    if (!mesh_.n.empty()) {
+        Vec3 ns = normalize(mesh_.n[i0] * (1.0f - u - v) + mesh_.n[i1] * u + mesh_.n[i2] * v);
+        hit->ns = length_sq(ns) > 0 ? ns : hit->ng;
+    } else {
+        hit->ns = hit->ng;
+    }
+    if (!mesh_.uv.empty()) {
+        hit->uv = Vec2(mesh_.uv[i0].x * (1 - u - v) + mesh_.uv[i1].x * u + mesh_.uv[i2].x * v,
+                       mesh_.uv[i0].y * (1 - u - v) + mesh_.uv[i1].y * u + mesh_.uv[i2].y * v);
+    } else {
+        hit->uv = Vec2(u, v);
+    }
+    hit->shape = this;
+    hit->prim = prim;
+}
+
+// ----------------------------------------------------------------------------------------------
+// SphereShape (Embree user geometry)
+
+SdfSample SphereShape::sdf(const Vec3& p) const {
+    SdfSample s = sdf_sphere(p, c_, r_);
+    if (flip_) {
+        s.f = -s.f;
+        s.grad = -s.grad;
+    }
+    return s;
+}
+
+Aabb SphereShape::bounds() const {
+    Aabb b;
+    b.expand(c_ - Vec3(r_));
+    b.expand(c_ + Vec3(r_));
+    return b;
+}
+
+void SphereShape::sample_position(const Vec2& u, Vec3* p, Vec3* n) const {
+    float z = 1.0f - 2.0f * u.x;
+    float r = safe_sqrt(1.0f - z * z), phi = 2.0f * kPi * u.y;
+    Vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+    *p = c_ + d * r_;
+    *n = flip_ ? -d : d;
+}
+
+bool SphereShape::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float* t) const {
+    double ox = double(o.x) - c_.x, oy = double(o.y) - c_.y, oz = double(o.z) - c_.z;
+    double a = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
+    double b = ox * d.x + oy * d.y + oz * d.z;
+    double c = ox * ox + oy * oy + oz * oz - double(r_) * r_;
+    double disc = b * b - a * c;
+    if (disc < 0) return false;
+    double sq = std::sqrt(disc);
+    // numerically stable roots
+    double q = b > 0 ? -(b + sq) : -(b - sq);
+    double t0 = q / a, t1 = q != 0 ? c / q : t0;
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > tnear && t0 < tfar) { *t = float(t0); return true; }
+    if (t1 > tnear && t1 < tfar) { *t = float(t1); return true; }
+    return false;
+}
+
+namespace {
+
+void sphere_bounds(const RTCBoundsFunctionArguments* args) {
+    const SphereShape* s = static_cast<const SphereShape*>(args->geometryUserPtr);
+    Aabb b = s->bounds();
+    args->bounds_o->lower_x = b.lo.x; args->bounds_o->lower_y = b.lo.y; args->bounds_o->lower_z = b.lo.z;
+    args->bounds_o->upper_x = b.hi.x; args->bounds_o->upper_y = b.hi.y; args->bounds_o->upper_z = b.hi.z;
+}
+
+void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
+    const SphereShape* s = static_cast<const SphereShape*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i]) continue;
+        RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
+        RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
+        Vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
+        Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
+        float t;
+        if (!s->intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t)) continue;
+        Vec3 n = o + d * t - s->center();
+        RTCRayN_tfar(ray, args->N, i) = t;
+        RTCHitN_Ng_x(hit, args->N, i) = n.x;
+        RTCHitN_Ng_y(hit, args->N, i) = n.y;
+        RTCHitN_Ng_z(hit, args->N, i) = n.z;
+        RTCHitN_u(hit, args->N, i) = 0.0f;
+        RTCHitN_v(hit, args->N, i) = 0.0f;
+        RTCHitN_primID(hit, args->N, i) = args->primID;
+        RTCHitN_geomID(hit, args->N, i) = args->geomID;
+        RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
+    }
+}
+
+void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
+    const SphereShape* s = static_cast<const SphereShape*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i]) continue;
+        RTCRayN* ray = args->ray;
+        Vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
+        Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
+        float t;
+        if (s->intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t))
+            RTCRayN_tfar(ray, args->N, i) = -kInf;
+    }
+}
+
+}  // namespace
+
+unsigned SphereShape::attach(RTCDevice device, RTCScene scene) const {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, 1);
+    rtcSetGeometryUserData(g, const_cast<SphereShape*>(this));
+    rtcSetGeometryBoundsFunction(g, sphere_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, sphere_intersect);
+    rtcSetGeometryOccludedFunction(g, sphere_occluded);
+    rtcCommitGeometry(g);
+    unsigned id = rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    return id;
+}
+
+void SphereShape::fill_hit(const Ray& ray, float t, unsigned prim, float, float, SurfaceHit* hit) const {
+    Vec3 p = ray.at(t);
+    Vec3 n = normalize(p - c_);
+    hit->t = t;
+    hit->p = c_ + n * r_;  // re-project onto the surface
+    hit->ng = flip_ ? -n : n;
+    hit->ns = hit->ng;
+    hit->uv = Vec2(std::atan2(n.y, n.x) * (0.5f * kInvPi) + 0.5f, std::acos(std::clamp(n.z, -1.0f, 1.0f)) * kInvPi);
+    hit->shape = this;
+    hit->prim = prim;
+}
+
+// ----------------------------------------------------------------------------------------------
+// Canonical meshes
+
+TriMesh make_cube_mesh() {
+    TriMesh m;
+    const Vec3 normals[6] = {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(0, 0, -1)};
+    for (const Vec3& n : normals) {
+        // tangent frame (s, t) with s x t = n so that the winding is counter-clockwise seen from outside
+        Vec3 s = std::fabs(n.x) > 0 ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
+        Vec3 t = cross(n, s);
+        s = cross(t, n);
+        uint32_t base = uint32_t(m.p.size());
+        const float cu[4] = {-1, 1, 1, -1}, cv[4] = {-1, -1, 1, 1};
+        for (int k = 0; k < 4; ++k) {
+            m.p.push_back(n + s * cu[k] + t * cv[k]);
+            m.n.push_back(n);
+            m.uv.push_back(Vec2(0.5f * (cu[k] + 1), 0.5f * (cv[k] + 1)));
+        }
+        const uint32_t tri[6] = {0, 1, 2, 0, 2, 3};
+        for (uint32_t k : tri) m.idx.push_back(base + k);
+    }
+    return m;
+}
+
+TriMesh make_rectangle_mesh() {
+    TriMesh m;
+    m.p = {Vec3(-1, -1, 0), Vec3(1, -1, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0)};
+    m.n = {Vec3(0, 0, 1), Vec3(0, 0, 1), Vec3(0, 0, 1), Vec3(0, 0, 1)};
+    m.uv = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+    m.idx = {0, 1, 2, 0, 2, 3};
+    return m;
+}
+
+TriMesh make_disk_mesh(int segments) {
+    TriMesh m;
+    m.p.push_back(Vec3(0, 0, 0));
+    m.n.push_back(Vec3(0, 0, 1));
+    m.uv.push_back(Vec2(0.5f, 0.5f));
+    for (int i = 0; i < segments; ++i) {
+        double phi = 2.0 * 3.14159265358979323846 * i / segments;
+        m.p.push_back(Vec3(float(std::cos(phi)), float(std::sin(phi)), 0));
+        m.n.push_back(Vec3(0, 0, 1));
+        m.uv.push_back(Vec2(float(0.5 + 0.5 * std::cos(phi)), float(0.5 + 0.5 * std::sin(phi))));
+    }
+    for (int i = 0; i < segments; ++i) {
+        m.idx.push_back(0);
+        m.idx.push_back(uint32_t(1 + i));
+        m.idx.push_back(uint32_t(1 + (i + 1) % segments));
+    }
+    return m;
+}
+
+TriMesh make_sphere_mesh(int rings, int segments) {
+    TriMesh m;
+    m.p.push_back(Vec3(0, 0, 1));
+    for (int r = 1; r < rings; ++r) {
+        double th = 3.14159265358979323846 * r / rings;
+        for (int s = 0; s < segments; ++s) {
+            double ph = 2.0 * 3.14159265358979323846 * s / segments;
+            m.p.push_back(Vec3(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)), float(std::cos(th))));
+        }
+    }
+    m.p.push_back(Vec3(0, 0, -1));
+    uint32_t south = uint32_t(m.p.size() - 1);
+    auto ring = [&](int r, int s) { return uint32_t(1 + (r - 1) * segments + ((s % segments + segments) % segments)); };
+    for (int s = 0; s < segments; ++s) {
+        m.idx.insert(m.idx.end(), {0u, ring(1, s), ring(1, s + 1)});
+        m.idx.insert(m.idx.end(), {south, ring(rings - 1, s + 1), ring(rings - 1, s)});
+    }
+    for (int r = 1; r + 1 < rings; ++r)
+        for (int s = 0; s < segments; ++s) {
+            m.idx.insert(m.idx.end(), {ring(r, s), ring(r + 1, s), ring(r + 1, s + 1)});
+            m.idx.insert(m.idx.end(), {ring(r, s), ring(r + 1, s + 1), ring(r, s + 1)});
+        }
+    return m;
+}
+
+}  // namespace mf

@@ -19,10 +19,14 @@
 //! - **Units**: `sigma` in scene units, roughness unitless, `alpha_i = √2 σ / l_i` (Eq. 4).
 //! - **Spectrum**: RGB triplets ([`Rgb`]).
 
+// `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod error;
 pub mod ffi;
 pub mod frame;
 pub mod fresnel;
+pub mod gpis;
 pub mod height;
 pub mod medium;
 pub mod ndf;

@@ -26,6 +26,18 @@
 #define MF_VERSION_PATCH 0
 
 /**
+ * [`mf_gpis_start::kind`]: the segment starts in free space (camera or light ray): the origin
+ * value is drawn from the prior conditioned on `f > 0`.
+ */
+#define MF_GPIS_START_FREE 0
+
+/**
+ * [`mf_gpis_start::kind`]: the segment starts at the previous crossing (`f = 0`), and, with
+ * `memory = renewal_plus`, remembers its gradient.
+ */
+#define MF_GPIS_START_ON_SURFACE 1
+
+/**
  * Uniform numbers consumed by [`mf_phase_sample`].
  */
 #define MF_PHASE_SAMPLE_DIMENSIONS 5
@@ -70,6 +82,11 @@ typedef enum mf_status {
 } mf_status;
 
 /**
+ * An immutable GPIS configuration; safe to share between threads.
+ */
+typedef struct mf_gpis mf_gpis;
+
+/**
  * An immutable macrofacet medium. Safe to share between threads.
  */
 typedef struct mf_medium mf_medium;
@@ -90,23 +107,41 @@ typedef struct mf_vec3 {
 } mf_vec3;
 
 /**
- * The local frame of an event: `normal` = gradient of the mean SDF (need not be normalised,
- * must be non-zero), `tangent` = direction of `alpha_u` (projected orthogonal to the normal; any
- * vector, even zero, for isotropic roughness).
+ * The mean signed distance and its gradient at a point, as the host's callback returns them.
  */
-typedef struct mf_frame {
-  struct mf_vec3 normal;
-  struct mf_vec3 tangent;
-} mf_frame;
+typedef struct mf_sdf_sample {
+  double f;
+  struct mf_vec3 gradient;
+} mf_sdf_sample;
 
 /**
- * Result of free-flight sampling: `scattered` is true when a collision happened at distance `t`
- * (then `0 <= t <= t_max`); false when the ray passed the whole segment (`t` is then `t_max`).
+ * The host's mean signed distance: writes `f(p)` and `∇f(p)` (world space) to `out`. Must not
+ * unwind; a NaN or infinite answer makes the trace fail with `MF_ERROR_INVALID_ARGUMENT`.
  */
-typedef struct mf_free_flight {
-  bool scattered;
+typedef void (*mf_sdf_fn)(void *user_data, struct mf_vec3 p, struct mf_sdf_sample *out);
+
+/**
+ * Where a traced segment starts: `kind` is `MF_GPIS_START_FREE` or `MF_GPIS_START_ON_SURFACE`;
+ * `gradient` is the previous crossing's sampled gradient (used with `renewal_plus` only).
+ */
+typedef struct mf_gpis_start {
+  uint32_t kind;
+  struct mf_vec3 gradient;
+} mf_gpis_start;
+
+/**
+ * The first entering crossing of a realization: `hit` false when the ray leaves the band of the
+ * mean surface or reaches `t_max` first (the other fields are then zero). `normal` is outward
+ * (`normal . d < 0`); `gradient` is the sampled, unnormalised gradient to pass on to the next
+ * segment's [`mf_gpis_start`].
+ */
+typedef struct mf_gpis_hit {
+  bool hit;
   double t;
-} mf_free_flight;
+  struct mf_vec3 point;
+  struct mf_vec3 normal;
+  struct mf_vec3 gradient;
+} mf_gpis_hit;
 
 /**
  * Linear RGB.
@@ -136,6 +171,25 @@ typedef struct mf_phase_sample_result {
   double pdf;
   bool valid;
 } mf_phase_sample_result;
+
+/**
+ * The local frame of an event: `normal` = gradient of the mean SDF (need not be normalised,
+ * must be non-zero), `tangent` = direction of `alpha_u` (projected orthogonal to the normal; any
+ * vector, even zero, for isotropic roughness).
+ */
+typedef struct mf_frame {
+  struct mf_vec3 normal;
+  struct mf_vec3 tangent;
+} mf_frame;
+
+/**
+ * Result of free-flight sampling: `scattered` is true when a collision happened at distance `t`
+ * (then `0 <= t <= t_max`); false when the ray passed the whole segment (`t` is then `t_max`).
+ */
+typedef struct mf_free_flight {
+  bool scattered;
+  double t;
+} mf_free_flight;
 
 /**
  * One free-flight or transmittance query of a batch: the segment starts where the signed
@@ -202,6 +256,65 @@ const char *mf_status_str(int32_t status);
  * `buf` must be valid for `len` bytes of writes.
  */
 enum mf_status mf_last_error_message(char *buf, size_t len, size_t *out_len);
+
+/**
+ * Creates a GPIS from named parameters: the macrofacet medium's names (`sigma`, `variance`,
+ * `shell_extent` = half-width of the sampled band in σ, default 6, `distribution` gpss |
+ * beckmann, `alpha*`, `lengthscale*`, `material`, `eta`, `k`, `specular_reflectance`) plus
+ * `memory` (renewal | renewal_plus, default renewal_plus) and `step_correlation` (default 0.95).
+ *
+ * # Safety
+ * `params` must be a live handle (or NULL); `out_gpis` NULL or valid for writes.
+ */
+enum mf_status mf_gpis_new(const struct mf_params *params, struct mf_gpis **out_gpis);
+
+/**
+ * Releases a GPIS; NULL is a no-op.
+ *
+ * # Safety
+ * `gpis` must be NULL or a pointer from [`mf_gpis_new`] not yet freed, unused by other threads.
+ */
+void mf_gpis_free(struct mf_gpis *gpis);
+
+/**
+ * The half-width of the band around the mean surface where realizations are sampled
+ * (`shell_extent * sigma`, scene units): rays may start at `f = envelope` with
+ * `MF_GPIS_START_FREE`.
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_gpis_envelope(const struct mf_gpis *gpis, double *out_envelope);
+
+/**
+ * Realizes the GPIS along `origin + t d`, `0 < t <= t_max` (+inf allowed), and returns its first
+ * entering crossing. `sdf(user_data, p, out)` supplies the mean; `seed` the random stream.
+ *
+ * # Safety
+ * Pointers must be NULL or valid; `sdf` must be safe to call with `user_data` from this thread.
+ */
+enum mf_status mf_gpis_trace(const struct mf_gpis *gpis,
+                             mf_sdf_fn sdf,
+                             void *user_data,
+                             struct mf_vec3 origin,
+                             struct mf_vec3 d,
+                             double t_max,
+                             const struct mf_gpis_start *start,
+                             uint64_t seed,
+                             struct mf_gpis_hit *out_hit);
+
+/**
+ * Specular reflection at a crossing: `wi` (pointing away, `wi = -d`) about the unit `normal`.
+ * The result's `pdf` is 0: the reflection is a delta, so it takes no part in MIS. `valid` is
+ * false when `wi` lies behind the normal.
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_gpis_scatter(const struct mf_gpis *gpis,
+                               struct mf_vec3 wi,
+                               struct mf_vec3 normal,
+                               struct mf_phase_sample_result *out_sample);
 
 /**
  * Creates a medium from named parameters (see the README's parameter table). On failure nothing

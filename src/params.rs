@@ -21,6 +21,7 @@
 
 use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
+use crate::gpis::{GpisSurface, MarchSettings, Memory, SeKernel};
 use crate::height::{HeightProfile, DEFAULT_SHELL_EXTENT};
 use crate::medium::MacrofacetMedium;
 use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Ndf};
@@ -170,7 +171,7 @@ impl<'a> Reader<'a> {
             None => Ok(()),
             Some(n) => Err(Error::new(
                 ErrorKind::UnknownParameter,
-                format!("unknown parameter \"{n}\" for a macrofacet medium (or not applicable to the chosen options)"),
+                format!("unknown parameter \"{n}\" (or not applicable to the chosen options)"),
             )),
         }
     }
@@ -188,12 +189,7 @@ fn invalid_choice(name: &str, got: &str, choices: &str) -> Error {
 pub fn medium_from_params(params: &ParamSet) -> Result<MacrofacetMedium> {
     let r = Reader::new(params);
 
-    let sigma = match (r.float("sigma")?, r.float("variance")?) {
-        (Some(s), None) => check_positive("sigma", s, false)?,
-        (None, Some(v)) => check_positive("variance", v, false)?.sqrt(),
-        (Some(_), Some(_)) => return Err(missing("give either \"sigma\" or \"variance\", not both".into())),
-        (None, None) => return Err(missing("a macrofacet medium needs \"sigma\" (or \"variance\")".into())),
-    };
+    let sigma = read_sigma(&r)?;
     let shell_extent = r.float("shell_extent")?.unwrap_or(DEFAULT_SHELL_EXTENT);
     let height = HeightProfile::new(sigma, shell_extent)
         .map_err(|e| Error::new(e.kind, e.message))?;
@@ -232,6 +228,62 @@ pub fn medium_from_params(params: &ParamSet) -> Result<MacrofacetMedium> {
 
     r.finish()?;
     Ok(MacrofacetMedium { height, phase: MacrofacetPhase { ndf, micro_bsdf, sampling } })
+}
+
+/// Builds the realization-based GPIS ground truth (seeds/004) from the macrofacet medium's
+/// parameter names, so that a scene switches method by changing only the type:
+/// `sigma`/`variance`, `shell_extent` (the band `±kσ` of the mean surface where realizations are
+/// sampled; default 6 for the ground truth), `distribution` (`gpss`, or `beckmann` = height-field
+/// kernel `l_z = ∞`; `ggx` is not a Gaussian-process kernel), the roughness or kernel form,
+/// `material`/`eta`/`k`/`specular_reflectance`, plus `memory` (`renewal` or `renewal_plus`,
+/// default `renewal_plus`) and `step_correlation` (in (0, 1), default 0.95). Parameters that only
+/// concern the statistical medium (`micro_bsdf` other than `conductor`, `vndf_sampling`,
+/// `mixture_ratio`, `reflectance`) are errors.
+pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
+    let r = Reader::new(params);
+    let sigma = read_sigma(&r)?;
+    let mut settings = MarchSettings::default();
+    if let Some(k) = r.float("shell_extent")? {
+        settings.envelope = check_positive("shell_extent", k, false)?;
+    }
+    if let Some(rho) = r.float("step_correlation")? {
+        if !(rho > 0.0 && rho < 1.0) {
+            return Err(Error::new(ErrorKind::InvalidValue, format!("parameter \"step_correlation\" must lie in (0, 1), got {rho}")));
+        }
+        settings.step_correlation = rho;
+    }
+    let height_field = match r.string("distribution")?.unwrap_or("gpss") {
+        "gpss" => false,
+        "beckmann" => true,
+        "ggx" => {
+            return Err(Error::new(ErrorKind::InvalidValue,
+                "distribution \"ggx\" has no Gaussian-process kernel: a gpis medium takes \"gpss\" or \"beckmann\""))
+        }
+        other => return Err(invalid_choice("distribution", other, "\"gpss\", \"beckmann\"")),
+    };
+    let alpha = read_roughness(&r, sigma, !height_field)?;
+    let kernel = SeKernel::from_roughness(sigma, glam::DVec3::from_array(alpha))?;
+    let memory = match r.string("memory")?.unwrap_or("renewal_plus") {
+        "renewal" => Memory::Renewal,
+        "renewal_plus" => Memory::RenewalPlus,
+        other => return Err(invalid_choice("memory", other, "\"renewal\", \"renewal_plus\"")),
+    };
+    let micro_bsdf = match r.string("micro_bsdf")?.unwrap_or("conductor") {
+        "conductor" => read_conductor(&r)?,
+        other => return Err(invalid_choice("micro_bsdf", other, "\"conductor\" (a gpis surface reflects specularly)")),
+    };
+    r.finish()?;
+    Ok(GpisSurface { kernel, memory, settings, micro_bsdf })
+}
+
+/// `sigma` from `sigma` or `variance` (exactly one).
+fn read_sigma(r: &Reader) -> Result<f64> {
+    match (r.float("sigma")?, r.float("variance")?) {
+        (Some(s), None) => check_positive("sigma", s, false),
+        (None, Some(v)) => Ok(check_positive("variance", v, false)?.sqrt()),
+        (Some(_), Some(_)) => Err(missing("give either \"sigma\" or \"variance\", not both".into())),
+        (None, None) => Err(missing("\"sigma\" (or \"variance\") is required".into())),
+    }
 }
 
 /// `[alpha_x, alpha_y, alpha_z]` from either the roughness or the kernel form.

@@ -355,3 +355,59 @@ fn repr_c_layouts_match_the_c_test() {
     );
     assert_eq!(size_of::<mf_status>(), 4);
 }
+
+/// `f = z - 0.25`: a plane for the GPIS trace, counting its calls through `user_data`.
+unsafe extern "C" fn plane_sdf(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_sdf_sample) {
+    *(user_data as *mut usize) += 1;
+    *out = mf_sdf_sample { f: p.z - 0.25, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
+}
+
+#[test]
+fn gpis_trace_equals_the_core_for_the_same_seed() {
+    use macrofacet::gpis::{Plane, StartState, Trace};
+    use macrofacet::params::gpis_from_params;
+    use macrofacet::stats::Pcg32;
+    let mut params = ParamSet::new();
+    params.set_float("sigma", 0.5).set_float("alpha", 0.8).set_string("memory", "renewal_plus");
+    let core = gpis_from_params(&params).unwrap();
+    let mut handle: *mut mf_params = ptr::null_mut();
+    let mut gpis: *mut mf_gpis = ptr::null_mut();
+    unsafe {
+        assert_eq!(mf_params_new(&mut handle), mf_status::MF_OK);
+        for (name, value) in [("sigma", 0.5), ("alpha", 0.8)] {
+            let name = CString::new(name).unwrap();
+            assert_eq!(mf_params_set_float(handle, name.as_ptr(), value), mf_status::MF_OK);
+        }
+        let (name, value) = (CString::new("memory").unwrap(), CString::new("renewal_plus").unwrap());
+        assert_eq!(mf_params_set_string(handle, name.as_ptr(), value.as_ptr()), mf_status::MF_OK);
+        assert_eq!(mf_gpis_new(handle, &mut gpis), mf_status::MF_OK);
+        mf_params_free(handle);
+    }
+    let mean = Plane { height: 0.25 };
+    let mut calls = 0usize;
+    let mut hits = 0;
+    for seed in 0..200u64 {
+        let d = DVec3::new(0.3, -0.2, -0.9).normalize();
+        let origin = DVec3::new(0.0, 0.0, 3.0);
+        let mut rng = Pcg32::new(seed, 0x6d66_6770_6973);
+        // The FFI renormalises d with check_direction; hand the core the same vector.
+        let expected = core.trace(&mean, origin, check_direction("d", d).unwrap(), f64::INFINITY, &StartState::Uncorrelated, &mut || rng.next_f64());
+        let start = mf_gpis_start { kind: MF_GPIS_START_FREE, gradient: v(DVec3::ZERO) };
+        let mut hit = mf_gpis_hit { hit: false, t: f64::NAN, point: v(DVec3::ZERO), normal: v(DVec3::ZERO), gradient: v(DVec3::ZERO) };
+        let status = unsafe {
+            mf_gpis_trace(gpis, Some(plane_sdf), &mut calls as *mut usize as *mut _, v(origin), v(d), f64::INFINITY, &start, seed, &mut hit)
+        };
+        assert_eq!(status, mf_status::MF_OK);
+        match expected {
+            Trace::Hit(c) => {
+                hits += 1;
+                assert!(hit.hit && hit.t.to_bits() == c.t.to_bits(), "seed {seed}: {hit:?} vs {c:?}");
+                assert_eq!(bits3(dv(hit.normal).to_array()), bits3(c.normal.to_array()));
+                assert_eq!(bits3(dv(hit.gradient).to_array()), bits3(c.gradient.to_array()));
+            }
+            _ => assert!(!hit.hit, "seed {seed}: the FFI hit, the core did not"),
+        }
+    }
+    assert!(calls > 0 && hits == 200, "{hits} hits, {calls} callback calls");
+    unsafe { mf_gpis_free(gpis) };
+}

@@ -15,9 +15,11 @@
 
 #![allow(non_camel_case_types)]
 
+mod gpis;
 mod medium;
 mod params;
 
+pub use gpis::*;
 pub use medium::*;
 pub use params::*;
 

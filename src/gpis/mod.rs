@@ -89,6 +89,8 @@
 mod experiments;
 mod kernel;
 pub mod linalg;
+mod surface;
+pub use surface::GpisSurface;
 mod mean;
 
 pub use experiments::{mirror_random_walk, transmittance_curve, visible_normals, GpisWalk, TransmittanceEstimate};

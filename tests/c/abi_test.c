@@ -1134,6 +1134,178 @@ static void test_bad_query_arguments(void) {
 #undef SAMPLE_CASE
 }
 
+/* ------------------------------------------------------------------------------ gpis */
+
+/* The mean SDF of the plane z = 0 (f = z), with a call counter in user_data. */
+static void plane_sdf(void *user_data, mf_vec3 p, mf_sdf_sample *out) {
+  ++*(int *)user_data;
+  out->f = p.z;
+  out->gradient = v3(0, 0, 1);
+}
+
+static void nan_sdf(void *user_data, mf_vec3 p, mf_sdf_sample *out) {
+  (void)user_data;
+  (void)p;
+  out->f = NAN;
+  out->gradient = v3(0, 0, 1);
+}
+
+static mf_gpis *build_gpis(const char *memory) {
+  mf_params *p = NULL;
+  mf_gpis *g = NULL;
+  EXPECT_OK(mf_params_new(&p));
+  EXPECT_OK(mf_params_set_float(p, "sigma", 1.0));
+  EXPECT_OK(mf_params_set_float(p, "alpha", 1.0));
+  EXPECT_OK(mf_params_set_string(p, "material", "Au"));
+  EXPECT_OK(mf_params_set_string(p, "memory", memory));
+  EXPECT_OK(mf_gpis_new(p, &g));
+  mf_params_free(p);
+  CHECK(g != NULL, "gpis not built: %s", last_error());
+  return g;
+}
+
+/* The realization-based GPIS: construction errors, determinism per seed, crossing geometry, the
+ * first-crossing height statistics of a plane, specular scattering, and bad calls. */
+static void test_gpis(void) {
+  /* Construction: the macrofacet names plus memory; statistical-medium-only names are errors. */
+  {
+    mf_params *p = NULL;
+    mf_gpis *g = (mf_gpis *)0x1;
+    EXPECT_OK(mf_params_new(&p));
+    EXPECT_OK(mf_params_set_float(p, "sigma", 1.0));
+    EXPECT_OK(mf_params_set_float(p, "alpha", 0.5));
+    EXPECT_OK(mf_params_set_string(p, "distribution", "ggx"));
+    EXPECT_STATUS(mf_gpis_new(p, &g), MF_ERROR_INVALID_VALUE, "ggx");
+    EXPECT_OK(mf_params_set_string(p, "distribution", "gpss"));
+    EXPECT_OK(mf_params_set_string(p, "memory", "global"));
+    EXPECT_STATUS(mf_gpis_new(p, &g), MF_ERROR_INVALID_VALUE, "memory");
+    EXPECT_OK(mf_params_set_string(p, "memory", "renewal"));
+    EXPECT_OK(mf_params_set_string(p, "vndf_sampling", "exact"));
+    EXPECT_STATUS(mf_gpis_new(p, &g), MF_ERROR_UNKNOWN_PARAMETER, "vndf_sampling");
+    CHECK(g == (mf_gpis *)0x1, "mf_gpis_new wrote its out-parameter on failure");
+    EXPECT_STATUS(mf_gpis_new(NULL, &g), MF_ERROR_NULL_POINTER, "params");
+    EXPECT_STATUS(mf_gpis_new(p, NULL), MF_ERROR_NULL_POINTER, "out_gpis");
+    mf_params_free(p);
+    mf_gpis_free(NULL);
+  }
+
+  mf_gpis *g = build_gpis("renewal_plus");
+  double envelope = 0;
+  EXPECT_OK(mf_gpis_envelope(g, &envelope));
+  CHECK_REL(envelope, 6.0, 1e-15); /* default band: 6 sigma */
+
+  const mf_vec3 down = v3(0, 0, -1);
+  const mf_gpis_start free_start = {MF_GPIS_START_FREE, {0, 0, 0}};
+  int calls = 0;
+  mf_gpis_hit a, b;
+  EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, v3(0, 0, envelope), down, INFINITY, &free_start, 42, &a));
+  EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, v3(0, 0, envelope), down, INFINITY, &free_start, 42, &b));
+  CHECK(calls > 0, "the sdf callback was never called");
+  CHECK(a.hit && b.hit && a.t == b.t && same_bits(&a.normal, &b.normal, sizeof a.normal) &&
+            same_bits(&a.gradient, &b.gradient, sizeof a.gradient),
+        "same seed must give the same realization");
+  CHECK_ABS(a.point.z, envelope - a.t, 1e-12);
+  CHECK(a.normal.z > 0.0 && fabs(a.normal.x * a.normal.x + a.normal.y * a.normal.y + a.normal.z * a.normal.z - 1) < 1e-12,
+        "normal (%g %g %g) must be unit and face the ray", a.normal.x, a.normal.y, a.normal.z);
+
+  /* First-crossing heights along d from above follow, in Smith's independence approximation,
+   * the CDF Phi(h)^(1 + Lambda(-d)) (seeds/002 Eq. 20 integrated); the realizations carry real
+   * correlations, which shift the mean by a few hundredths (design notes: ~0.01 in
+   * transmittance). Tolerance: 4 standard errors + 0.06 model error. Lambda from Eq. 32 (alpha 1). */
+  const double thetas[2] = {0.0, 80.0 * PI / 180.0};
+  for (int k = 0; k < 2; ++k) {
+    const mf_vec3 d = v3(sin(thetas[k]), 0, -cos(thetas[k]));
+    const double a_up = cos(thetas[k]); /* a of Eq. 32 for -d with alpha_x = alpha_y = alpha_z = 1 */
+    const double lambda = exp(-a_up * a_up) / (2 * a_up * sqrt(PI)) + 0.5 * (erf(a_up) - 1);
+    const double n = 1.0 + lambda;
+    double expected = 0;
+    for (double h = -10; h < 10; h += 1e-3) {
+      const double cdf = 0.5 * erfc(-h / SQRT2), pdf = exp(-0.5 * h * h) / sqrt(2 * PI);
+      expected += h * n * pow(cdf, n - 1) * pdf * 1e-3;
+    }
+    double sum = 0, sum2 = 0;
+    int hits = 0, distinct = 0;
+    const mf_vec3 origin = v3(-envelope * d.x / d.z, 0, envelope);
+    for (uint64_t seed = 0; seed < 2000; ++seed) {
+      mf_gpis_hit h;
+      EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, origin, d, INFINITY, &free_start, seed, &h));
+      if (h.hit) {
+        ++hits;
+        sum += h.point.z;
+        sum2 += h.point.z * h.point.z;
+        distinct += h.t != a.t;
+      }
+    }
+    CHECK(hits == 2000, "a downward ray must always meet the plane's realization (%d of 2000)", hits);
+    const double mean = sum / hits, se = sqrt((sum2 / hits - mean * mean) / hits);
+    CHECK(fabs(mean - expected) < 4 * se + 0.06, "theta %g: mean first-crossing height %g +- %g, Smith %g",
+          thetas[k], mean, se, expected);
+    CHECK(distinct >= hits - 2, "seeds must change the realization (%d distinct)", distinct);
+  }
+
+  /* Scattering: gold Fresnel at the reflection angle, mirror direction; behind the normal: invalid. */
+  phase_sample_t s;
+  const mf_vec3 wi = v3(0.6, 0, 0.8);
+  EXPECT_OK(mf_gpis_scatter(g, wi, v3(0, 0, 1), &s));
+  CHECK(s.valid && fabs(s.wo.x + 0.6) < 1e-15 && fabs(s.wo.z - 0.8) < 1e-15 && s.pdf == 0.0,
+        "reflection of (0.6, 0, 0.8): (%g %g %g)", s.wo.x, s.wo.y, s.wo.z);
+  CHECK(s.weight.r > s.weight.g && s.weight.g > s.weight.b && s.weight.r < 1.0, "gold weight %g %g %g", s.weight.r,
+        s.weight.g, s.weight.b);
+  EXPECT_OK(mf_gpis_scatter(g, wi, v3(0, 0, -1), &s));
+  CHECK(!s.valid, "a direction behind the normal cannot reflect");
+
+  /* Renewal+ continues from the crossing with its gradient; the next segment leaves upward. */
+  EXPECT_OK(mf_gpis_scatter(g, v3(0, 0, 1), a.normal, &s));
+  const mf_gpis_start on = {MF_GPIS_START_ON_SURFACE, a.gradient};
+  mf_gpis_hit next;
+  EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, a.point, s.wo, INFINITY, &on, 7, &next));
+  CHECK(!next.hit || next.t > 0.0, "a continuation crossing lies ahead");
+
+  /* Bad calls leave the output untouched. */
+  mf_gpis_hit h;
+#define HIT_CASE(call, status, needle)                                                      \
+  do {                                                                                      \
+    memset(&h, 0xA5, sizeof h);                                                             \
+    unsigned char before[sizeof h];                                                         \
+    memcpy(before, &h, sizeof h);                                                           \
+    EXPECT_STATUS(call, status, needle);                                                    \
+    CHECK(same_bits(before, &h, sizeof h), "%s wrote its out-parameter on failure", #call); \
+  } while (0)
+  const mf_vec3 o = v3(0, 0, 1);
+  HIT_CASE(mf_gpis_trace(NULL, plane_sdf, &calls, o, down, 1, &free_start, 1, &h), MF_ERROR_NULL_POINTER, "gpis");
+  HIT_CASE(mf_gpis_trace(g, NULL, &calls, o, down, 1, &free_start, 1, &h), MF_ERROR_NULL_POINTER, "sdf");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, NULL, 1, &h), MF_ERROR_NULL_POINTER, "start");
+  EXPECT_STATUS(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, &free_start, 1, NULL), MF_ERROR_NULL_POINTER, "out_hit");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, v3(NAN, 0, 0), down, 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "origin");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, v3(0, 0, -2), 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 0.0, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "t_max");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, NAN, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "t_max");
+  const mf_gpis_start bad_kind = {7, {0, 0, 1}};
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, &bad_kind, 1, &h), MF_ERROR_INVALID_ARGUMENT, "start.kind");
+  const mf_gpis_start bad_gradient = {MF_GPIS_START_ON_SURFACE, {NAN, 0, 1}};
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, &bad_gradient, 1, &h), MF_ERROR_INVALID_ARGUMENT, "gradient");
+  HIT_CASE(mf_gpis_trace(g, nan_sdf, NULL, o, down, 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "sdf callback");
+  double x = 123.0;
+  EXPECT_STATUS(mf_gpis_envelope(NULL, &x), MF_ERROR_NULL_POINTER, "gpis");
+  EXPECT_STATUS(mf_gpis_envelope(g, NULL), MF_ERROR_NULL_POINTER, "out_envelope");
+  CHECK(x == 123.0, "mf_gpis_envelope wrote its out-parameter on failure");
+  memset(&s, 0xA5, sizeof s);
+  phase_sample_t before = s;
+  EXPECT_STATUS(mf_gpis_scatter(NULL, wi, o, &s), MF_ERROR_NULL_POINTER, "gpis");
+  EXPECT_STATUS(mf_gpis_scatter(g, v3(NAN, 0, 1), o, &s), MF_ERROR_INVALID_ARGUMENT, "wi");
+  EXPECT_STATUS(mf_gpis_scatter(g, wi, v3(0, 0, 3), &s), MF_ERROR_INVALID_ARGUMENT, "normal");
+  EXPECT_STATUS(mf_gpis_scatter(g, wi, o, NULL), MF_ERROR_NULL_POINTER, "out_sample");
+  CHECK(same_bits(&before, &s, sizeof s), "mf_gpis_scatter wrote its out-parameter on failure");
+#undef HIT_CASE
+  mf_gpis_free(g);
+
+  mf_gpis *renewal = build_gpis("renewal");
+  mf_gpis_hit r;
+  EXPECT_OK(mf_gpis_trace(renewal, plane_sdf, &calls, v3(0, 0, 6), down, INFINITY, &free_start, 3, &r));
+  CHECK(r.hit, "renewal trace must hit the plane");
+  mf_gpis_free(renewal);
+}
+
 int main(void) {
   test_last_error_message(); /* first: checks the fresh-thread state */
   test_version_and_status();
@@ -1145,6 +1317,7 @@ int main(void) {
   test_reference_values();
   test_batches();
   test_bad_query_arguments();
+  test_gpis();
   if (g_failures) {
     fprintf(stderr, "abi_test: %d of %d checks FAILED\n", g_failures, g_checks);
     return 1;

@@ -39,10 +39,11 @@ pub struct ConductorPreset {
 
 /// Named conductors, accepted by the `"material"` parameter (Mitsuba 3 uses the same names).
 ///
-/// Source: the measured optical constants of Palik, *Handbook of Optical Constants of Solids*
-/// (Academic Press, 1985), reduced to RGB by integrating against the sRGB colour matching
-/// functions — the triplets in common use by RGB renderers. `"none"` is handled separately as
-/// a perfect mirror (reflectance 1), as in Mitsuba.
+/// Source: measured spectral complex indices of refraction (Palik, *Handbook of Optical
+/// Constants of Solids*, 1985) converted to linear sRGB, as tabulated in Tungsten's
+/// `ComplexIorData.hpp` (B. Bitterli) — the triplets in common use by RGB renderers; `mfrender`'s
+/// independent `roughconductor` uses the same table, so the thin-shell comparison sees the same
+/// metal. `"none"` is handled separately as a perfect mirror (reflectance 1), as in Mitsuba.
 pub const CONDUCTOR_PRESETS: &[ConductorPreset] = &[
     ConductorPreset { name: "Ag", eta: [0.155265, 0.116723, 0.138342], k: [4.828181, 3.122249, 2.146961] },
     ConductorPreset { name: "Al", eta: [1.657460, 0.880369, 0.521229], k: [9.223869, 6.269523, 4.837001] },

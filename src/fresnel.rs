@@ -45,11 +45,11 @@ pub struct ConductorPreset {
 /// independent `roughconductor` uses the same table, so the thin-shell comparison sees the same
 /// metal. `"none"` is handled separately as a perfect mirror (reflectance 1), as in Mitsuba.
 pub const CONDUCTOR_PRESETS: &[ConductorPreset] = &[
-    ConductorPreset { name: "Ag", eta: [0.155265, 0.116723, 0.138342], k: [4.828181, 3.122249, 2.146961] },
-    ConductorPreset { name: "Al", eta: [1.657460, 0.880369, 0.521229], k: [9.223869, 6.269523, 4.837001] },
-    ConductorPreset { name: "Au", eta: [0.143119, 0.374957, 1.442479], k: [3.983160, 2.385721, 1.603215] },
-    ConductorPreset { name: "Cr", eta: [4.368240, 2.914183, 1.654774], k: [5.203870, 4.231365, 3.754947] },
-    ConductorPreset { name: "Cu", eta: [0.200438, 0.924033, 1.102212], k: [3.912949, 2.452848, 2.142188] },
+    ConductorPreset { name: "Ag", eta: [0.1552646489, 0.1167232965, 0.1383806959], k: [4.8283433224, 3.1222459278, 2.1469504455] },
+    ConductorPreset { name: "Al", eta: [1.6574599595, 0.8803689579, 0.5212287346], k: [9.2238691996, 6.2695232477, 4.8370012281] },
+    ConductorPreset { name: "Au", eta: [0.1431189557, 0.3749570432, 1.4424785571], k: [3.9831604247, 2.3857207478, 1.6032152899] },
+    ConductorPreset { name: "Cr", eta: [4.3696828663, 2.9167024892, 1.6547005413], k: [5.2064337956, 4.2313645277, 3.7549467933] },
+    ConductorPreset { name: "Cu", eta: [0.2004376970, 0.9240334304, 1.1022119527], k: [3.9129485033, 2.4528477015, 2.1421879552] },
 ];
 
 /// Looks a preset up by name (case-sensitive, as in Mitsuba).

@@ -93,57 +93,70 @@ pub(crate) fn box_muller(u1: f64, u2: f64) -> (f64, f64) {
 /// With `Z = φ(c) + c Φ(c)`, the unnormalised CDF is
 /// `F(x) = φ(c) − φ(x) + c [Φ(x) − Φ(−c)]` and the survival `S(x) = φ(x) + c Φ(−x)`; for `c < 0`
 /// the survival is evaluated as `φ(x) [1 − |c| M(x)]` with the Mills ratio
-/// `M(x) = Φ(−x)/φ(x) = sqrt(π/2) erfcx(x/√2)` so that nothing underflows. Newton's method on the
+/// `M(x) = Φ(−x)/φ(x) = sqrt(π/2) erfcx(x/√2)` so that nothing underflows. Halley/Newton on the
 /// logarithm of whichever tail is better conditioned (`ln F` below the median for `c >= 0`,
 /// `ln S` otherwise) — nearly linear in the tails, so a few steps suffice — safeguarded by
 /// bisection on the bracket `[-c, max(-c, 0) + 40]`.
 pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
     let lower_tail = c >= 0.0 && u < 0.5;
-    // For c < 0 every φ is divided by φ(c) (so `(x + c) φ(x)` becomes `(x + c) e^{-(x²-c²)/2}`).
-    let density = |x: f64| -> f64 {
+    // φ(x), or e^{-(x²-c²)/2} = φ(x)/φ(c) for c < 0 (everything is divided by φ(c) there).
+    let gauss = |x: f64| -> f64 {
         if c < 0.0 {
-            (x + c) * (-(x - c) * (x + c) * 0.5).exp()
+            (-(x - c) * (x + c) * 0.5).exp()
         } else {
-            (x + c) * normal_pdf(x)
+            normal_pdf(x)
         }
     };
+    let (pdf_c, cdf_minus_c) = (normal_pdf(c), normal_cdf(-c));
     let tail = |x: f64| -> f64 {
         if lower_tail {
-            normal_pdf(c) - normal_pdf(x) + c * (normal_cdf(x) - normal_cdf(-c))
+            pdf_c - normal_pdf(x) + c * (normal_cdf(x) - cdf_minus_c)
         } else if c >= 0.0 {
             normal_pdf(x) + c * normal_cdf(-x)
         } else {
             survival_scaled(c, x)
         }
     };
-    let z = if c >= 0.0 { normal_pdf(c) + c * normal_cdf(c) } else { survival_scaled(c, -c) };
+    let z = if c >= 0.0 { pdf_c + c * normal_cdf(c) } else { survival_scaled(c, -c) };
     let ln_target = if lower_tail { (u * z).ln() } else { ((-u).ln_1p()) + z.ln() };
-    // g(x) = ln tail(x) − ln target is increasing for the lower tail and decreasing for the upper.
+    // h(x) = ±(ln tail(x) − ln target) is increasing, with h' = p/T and h'' = p'/T ∓ (p/T)²
+    // for the density p = (x + c) φ(x), p' = φ(x) (1 − x (x + c)).
     let sign = if lower_tail { 1.0 } else { -1.0 };
     let mut lo = -c;
     let mut hi = (-c).max(0.0) + 40.0;
     let mut x = initial_guess(c, u).clamp(lo, hi);
     for _ in 0..60 {
         let t = tail(x);
-        let g = sign * (t.ln() - ln_target);
-        if g.is_nan() {
+        let h = sign * (t.ln() - ln_target);
+        if h.is_nan() {
             x = 0.5 * (lo + hi);
             continue;
         }
-        if g < 0.0 {
+        if h < 0.0 {
             lo = x;
-        } else if g > 0.0 {
+        } else if h > 0.0 {
             hi = x;
         } else {
             return x;
         }
-        let slope = density(x) / t; // |d ln tail / dx|
-        let newton = x - g / slope;
-        // A converged Newton step may land a rounding error outside the bracket: accept it.
-        if (newton - x).abs() <= 1e-13 * (1.0 + x.abs()) {
-            return newton.clamp(-c, f64::MAX);
+        let e = gauss(x);
+        let slope = (x + c) * e / t;
+        let curvature = e * (1.0 - x * (x + c)) / t - sign * slope * slope;
+        // Halley's step (cubic convergence), falling back to Newton's where its correction is
+        // large (far from the root).
+        let newton_step = h / slope;
+        let correction = 1.0 - 0.5 * newton_step * curvature / slope;
+        let halley = correction > 0.5 && correction < 2.0;
+        let step = if halley { newton_step / correction } else { newton_step };
+        let candidate = x - step;
+        // Near the root the error after a step is ~ step³ (Halley) or ~ step² (Newton): once
+        // that is below 1e-15 the candidate is final without another evaluation. (It may land a
+        // rounding error outside the bracket: accept it.)
+        let converged = if halley { 1e-5 } else { 1e-8 };
+        if step.abs() <= converged * (1.0 + x.abs()) {
+            return candidate.clamp(-c, f64::MAX);
         }
-        let next = if slope > 0.0 && newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+        let next = if slope > 0.0 && candidate > lo && candidate < hi { candidate } else { 0.5 * (lo + hi) };
         if (next - x).abs() <= 1e-13 * (1.0 + x.abs()) {
             return next;
         }
@@ -158,20 +171,21 @@ fn survival_scaled(c: f64, x: f64) -> f64 {
     (-(x - c) * (x + c) * 0.5).exp() * (1.0 + c * mills)
 }
 
-/// A starting point near the quantile: for large `c` the density is nearly `φ(x − 1/c)`; for very
-/// negative `c`, `x + c` tends to a Gamma(2, |c|) variable; in between, the Rayleigh quantile of
-/// the `c = 0` case, shifted.
+/// A starting point near the quantile: for very negative `c`, `x + c` tends to a Gamma(2, |c|)
+/// variable; otherwise the Laplace approximation of the density about its mode
+/// `x* = (−c + sqrt(c² + 4))/2` (where `1/(x + c) = x`), with variance `1/(1 + 1/(x* + c)²)`
+/// (it becomes `φ(x − 1/c)` for large `c`).
 fn initial_guess(c: f64, u: f64) -> f64 {
-    if c > 3.0 {
-        crate::special::probit(u) + 1.0 / c
-    } else if c < -3.0 {
-        // Gamma(2, 1) quantile q: (1 + q) e^{-q} = 1 − u, by two fixed-point steps.
+    if c < -3.0 {
+        // Gamma(2, 1) quantile q: (1 + q) e^{-q} = 1 − u, by three fixed-point steps.
         let w = -(-u).ln_1p();
         let mut q = w + (1.0 + w).ln();
         q = w + (1.0 + q).ln();
         q = w + (1.0 + q).ln();
         -c + q / (-c)
     } else {
-        (-2.0 * (-u).ln_1p()).sqrt() - 0.5 * c
+        let mode = 0.5 * ((c * c + 4.0).sqrt() - c);
+        let width = 1.0 / (1.0 + 1.0 / ((mode + c) * (mode + c))).sqrt();
+        (mode + width * crate::special::probit(u)).max(-c + 1e-3 * (mode + c))
     }
 }

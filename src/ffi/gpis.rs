@@ -10,7 +10,7 @@
 //! 64-bit `seed` (a trace needs an unbounded count of them); same seed, same realization.
 
 use super::medium::{mf_phase_sample_result, mf_rgb, mf_vec3};
-use super::{arg, boundary, mf_params, mf_status, out, FfiError};
+use super::{arg, boundary, free_handle, into_handle, mf_params, mf_status, out, FfiError};
 use crate::error::{Error, ErrorKind};
 use crate::frame::check_direction;
 use crate::gpis::{GpisSurface, MeanSdf, StartState, Trace};
@@ -115,7 +115,7 @@ pub unsafe extern "C" fn mf_gpis_new(params: *const mf_params, out_gpis: *mut *m
         let params = arg(params, "params")?;
         let slot = out(out_gpis, "out_gpis")?;
         let inner = gpis_from_params(&params.inner)?;
-        *slot = Box::into_raw(Box::new(mf_gpis { inner }));
+        *slot = into_handle(mf_gpis { inner });
         Ok(())
     })
 }
@@ -126,10 +126,7 @@ pub unsafe extern "C" fn mf_gpis_new(params: *const mf_params, out_gpis: *mut *m
 /// `gpis` must be NULL or a pointer from [`mf_gpis_new`] not yet freed, unused by other threads.
 #[no_mangle]
 pub unsafe extern "C" fn mf_gpis_free(gpis: *mut mf_gpis) {
-    if !gpis.is_null() {
-        // SAFETY: created by Box::into_raw in mf_gpis_new, freed once (caller contract).
-        let _ = std::panic::catch_unwind(|| drop(unsafe { Box::from_raw(gpis) }));
-    }
+    free_handle(gpis);
 }
 
 /// The half-width of the band around the mean surface where realizations are sampled

@@ -4,7 +4,7 @@
 //! gradient of the mean signed distance, and a tangent for anisotropic roughness) and world-space
 //! directions. Random numbers come from the host: the library owns no generator.
 
-use super::{arg, boundary, mf_params, mf_status, out, FfiError, FfiResult};
+use super::{arg, boundary, free_handle, into_handle, mf_params, mf_status, out, FfiError, FfiResult};
 use crate::error::{Error, ErrorKind};
 use crate::frame::{check_direction, Frame};
 use crate::medium::{FreeFlight, MacrofacetMedium};
@@ -176,7 +176,7 @@ pub unsafe extern "C" fn mf_medium_new(params: *const mf_params, out_medium: *mu
         let params = arg(params, "params")?;
         let slot = out(out_medium, "out_medium")?;
         let inner = medium_from_params(&params.inner)?;
-        *slot = Box::into_raw(Box::new(mf_medium { inner }));
+        *slot = into_handle(mf_medium { inner });
         Ok(())
     })
 }
@@ -188,10 +188,7 @@ pub unsafe extern "C" fn mf_medium_new(params: *const mf_params, out_medium: *mu
 /// may be using it.
 #[no_mangle]
 pub unsafe extern "C" fn mf_medium_free(medium: *mut mf_medium) {
-    if !medium.is_null() {
-        // SAFETY: created by Box::into_raw in mf_medium_new, freed once (caller contract).
-        let _ = std::panic::catch_unwind(|| drop(unsafe { Box::from_raw(medium) }));
-    }
+    free_handle(medium);
 }
 
 /// The signed distance of the shell's top face, `k * sigma` (scene units): the medium's region is

@@ -126,6 +126,22 @@ pub(crate) fn out<'a, T>(ptr: *mut T, name: &str) -> FfiResult<&'a mut T> {
     unsafe { ptr.as_mut() }.ok_or_else(|| FfiError::null(name))
 }
 
+/// Moves `value` to the heap and returns the opaque handle the `*_new` functions hand out.
+pub(crate) fn into_handle<T>(value: T) -> *mut T {
+    Box::into_raw(Box::new(value))
+}
+
+/// Releases a handle from [`into_handle`]; NULL is a no-op (the `*_free` convention).
+///
+/// # Safety
+/// `handle` must be NULL or come from `into_handle::<T>` and not have been freed.
+pub(crate) unsafe fn free_handle<T>(handle: *mut T) {
+    if !handle.is_null() {
+        // SAFETY: created by Box::into_raw in into_handle, freed once (caller contract).
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(handle) })));
+    }
+}
+
 /// Borrows a NUL-terminated UTF-8 string argument.
 pub(crate) fn str_arg<'a>(ptr: *const c_char, name: &str) -> FfiResult<&'a str> {
     if ptr.is_null() {

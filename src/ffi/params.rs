@@ -1,6 +1,6 @@
 //! `mf_params`: a parameter set filled by name from the host's scene format.
 
-use super::{arg, boundary, out, str_arg, FfiError, FfiResult};
+use super::{arg, boundary, free_handle, into_handle, out, str_arg, FfiError, FfiResult};
 use super::mf_status;
 use crate::params::{ParamSet, ParamValue};
 use std::ffi::c_char;
@@ -19,7 +19,7 @@ pub struct mf_params {
 pub unsafe extern "C" fn mf_params_new(out_params: *mut *mut mf_params) -> mf_status {
     boundary(|| {
         let slot = out(out_params, "out_params")?;
-        *slot = Box::into_raw(Box::new(mf_params { inner: ParamSet::new() }));
+        *slot = into_handle(mf_params { inner: ParamSet::new() });
         Ok(())
     })
 }
@@ -30,10 +30,7 @@ pub unsafe extern "C" fn mf_params_new(out_params: *mut *mut mf_params) -> mf_st
 /// `params` must be NULL or a pointer from [`mf_params_new`] not yet freed.
 #[no_mangle]
 pub unsafe extern "C" fn mf_params_free(params: *mut mf_params) {
-    if !params.is_null() {
-        // SAFETY: created by Box::into_raw in mf_params_new, freed once (caller contract).
-        let _ = std::panic::catch_unwind(|| drop(unsafe { Box::from_raw(params) }));
-    }
+    free_handle(params);
 }
 
 fn set(params: *mut mf_params, name: *const c_char, value: FfiResult<ParamValue>) -> mf_status {

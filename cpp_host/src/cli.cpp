@@ -148,7 +148,7 @@ int mfrender_main(int argc, char** argv) {
                 throw Error("output directory \"" + d + "\" does not exist");
         }
         ParsedScene parsed = parse_scene_file(scene_path, defines);
-        bopts.allow_macrofacet_placeholders = check;
+        bopts.allow_macrofacet_placeholders = false;  // --check validates macrofacet parameters too
         BuildReport report;
         std::unique_ptr<Scene> scene = build_scene(parsed, bopts, &report);
         if (check) {
@@ -164,7 +164,6 @@ int mfrender_main(int argc, char** argv) {
                 for (const auto& kv : u.bag->params) std::printf(" %s", kv.first.c_str());
                 std::printf("\n");
             }
-            if (!report.macrofacet.empty()) std::printf("  (rendering macrofacet media needs phase 2)\n");
             return 0;
         }
         ropts.progress = !quiet && ::isatty(STDERR_FILENO);

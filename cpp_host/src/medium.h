@@ -16,8 +16,8 @@
 //   * the phase function may depend on the local frame: MediumInteraction carries `frame_n`
 //     (set by the medium, e.g. to grad f) and PhaseFunction gets the interaction.
 //
-// In phase 1 only `homogeneous` exists; create_macrofacet_medium() is the single hook and fails
-// with "macrofacet media need phase 2".
+// Phase 2: create_macrofacet_medium() (medium_macrofacet.cpp) builds the macrofacet medium
+// through the library's C ABI; see medium_macrofacet.h.
 #pragma once
 
 #include <memory>
@@ -144,8 +144,9 @@ struct MediumParamBag {
     }
 };
 
-/// THE phase-2 hook: build the macrofacet medium of `shape` from its parameter bag.
-/// Phase 1 always throws mf::Error("... macrofacet media need phase 2").
+/// THE phase-2 hook: build the macrofacet medium of `shape` (its mean surface) from its
+/// parameter bag through mf_params_* / mf_medium_new. Returns a MacrofacetMedium; throws
+/// mf::Error at the file:line of the offending parameter when the library rejects the bag.
 std::shared_ptr<Medium> create_macrofacet_medium(const MediumParamBag& bag, const std::shared_ptr<const Shape>& shape);
 
 }  // namespace mf

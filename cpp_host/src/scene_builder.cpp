@@ -6,6 +6,7 @@
 #include <map>
 
 #include "image_io.h"
+#include "medium_macrofacet.h"
 
 namespace mf {
 
@@ -251,7 +252,7 @@ private:
         auto it = media_.find(&o);
         if (it != media_.end()) return it->second;
         if (o.type != "homogeneous")
-            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous; macrofacet/gpis in phase 2)");
+            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, macrofacet)");
         Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
         Rgb albedo = nonneg_rgb(o, "albedo", Rgb(0.75f));
         if (albedo.max() > 1.0f) throw perr(o, "albedo", "must lie in [0, 1]");
@@ -359,11 +360,23 @@ private:
             if (!mf_bag[k]) continue;
             const char* role = k == 0 ? "interior" : "exterior";
             if (report_) report_->macrofacet.push_back({mf_bag[k], shape, role});
-            if (!opts_.allow_macrofacet_placeholders) {
-                std::shared_ptr<const Medium> m = create_macrofacet_medium(*mf_bag[k], shape);  // phase 2 hook
-                (k == 0 ? shape->interior : shape->exterior) = m;
-                scene_->media.push_back(m);
-            }
+        }
+        if ((mf_bag[0] || mf_bag[1]) && !opts_.allow_macrofacet_placeholders) {
+            // The shape is the mean surface of a macrofacet medium (phase 2): the medium fills
+            // f < k*sigma, and the boundary f = k*sigma replaces the shape in the BVH.
+            if (mf_bag[1])
+                throw Error(mf_bag[1]->loc, o.describe() + ": a macrofacet medium must be the interior of its shape "
+                                                           "(the shape is its mean surface)");
+            if (!bsdfs.empty() && !shape->bsdf->is_null())
+                throw Error(bsdfs[0]->loc, o.describe() + ": the mean surface of a macrofacet medium has no BSDF of "
+                                                          "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
+            if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a macrofacet medium cannot be an emitter");
+            auto m = std::static_pointer_cast<const MacrofacetMedium>(
+                create_macrofacet_medium(*mf_bag[0], shape));  // phase 2 hook
+            shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
+            scene_->media.push_back(m);
+            scene_->add_shape(make_macrofacet_boundary(shape, m));
+            return;
         }
         scene_->add_shape(shape);
         if (em) scene_->add_emitter(em);
@@ -537,7 +550,10 @@ const char* supported_subset_text() {
               null, twosided (one or two nested bsdfs)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
-              macrofacet / gpis: parsed into a parameter bag, rendering needs phase 2
+              macrofacet (as the interior of its mean-surface shape; parameters as in the
+              C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
+              lengthscale*, micro_bsdf, material | eta,k, specular_reflectance,
+              reflectance, vndf_sampling, mixture_ratio)
   emitters    area (radiance), point (position | to_world, intensity), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)

@@ -173,6 +173,13 @@ MeshSdf::MeshSdf(const std::vector<Vec3>& positions, const std::vector<uint32_t>
             tr.en[k] = e;
         }
     }
+    for (Tri& tr : tri_) {
+        Vec3 c = (pos_[tr.v[0]] + pos_[tr.v[1]] + pos_[tr.v[2]]) / 3.0f;
+        float r = 0;
+        for (int k = 0; k < 3; ++k) r = std::max(r, length(pos_[tr.v[k]] - c));
+        tr.bc = c;
+        tr.br = r * 1.0001f + 1e-7f * scale_;
+    }
     // BVH over triangles.
     std::vector<Vec3> centroids(nt);
     for (size_t t = 0; t < nt; ++t)
@@ -292,17 +299,39 @@ float MeshSdf::closest(const Vec3& p, Vec3* closest_point, Vec3* pseudo_normal, 
         if (smooth_normal) *smooth_normal = bn;
         return kInf;
     }
+    // Coherence hint: consecutive queries of a thread (sphere tracing, tracking along a ray)
+    // usually have the same or a nearby closest triangle; its distance is an upper bound that
+    // prunes most of the traversal. Purely an accelerator: the result is the same.
+    struct Hint {
+        const MeshSdf* owner = nullptr;
+        uint32_t tri = 0;
+    };
+    thread_local Hint hint;
+    if (hint.owner == this && hint.tri < tri_.size()) {
+        Vec3 c, pn;
+        best = closest_in_tri(tri_[hint.tri], p, &c, &pn);
+        bc = c;
+        bn = pn;
+        best_tri = hint.tri;
+    }
     uint32_t stack[128];
     int sp = 0;
     stack[sp++] = 0;
     while (sp > 0) {
         const Node& n = nodes_[stack[--sp]];
-        if (n.box.dist_sq(p) >= best) continue;
+        // Prune with a relative margin so that the result is the global argmin of (distance,
+        // triangle index) whatever the starting bound: the answer must not depend on the hint
+        // (bit-identical images whatever the thread count), even at rounding-level ties.
+        const float prune = best * 1.0001f;
+        if (n.box.dist_sq(p) > prune) continue;
         if (n.count > 0) {
             for (uint32_t i = n.left_or_first; i < n.left_or_first + n.count; ++i) {
+                // bounding-sphere rejection (distance to the sphere is a lower bound)
+                float ds = length(p - tri_[i].bc) - tri_[i].br;
+                if (ds > 0 && ds * ds > prune) continue;
                 Vec3 c, pn;
                 float d = closest_in_tri(tri_[i], p, &c, &pn);
-                if (d < best) {
+                if (d < best || (d == best && i < best_tri)) {
                     best = d;
                     bc = c;
                     bn = pn;
@@ -314,10 +343,12 @@ float MeshSdf::closest(const Vec3& p, Vec3* closest_point, Vec3* pseudo_normal, 
             float dl = nodes_[l].box.dist_sq(p), dr = nodes_[r].box.dist_sq(p);
             // push the farther child first so the nearer one is visited first
             if (dl < dr) std::swap(l, r), std::swap(dl, dr);
-            if (dl < best && sp < 127) stack[sp++] = l;
-            if (dr < best && sp < 127) stack[sp++] = r;
+            if (dl <= prune && sp < 127) stack[sp++] = l;
+            if (dr <= prune && sp < 127) stack[sp++] = r;
         }
     }
+    hint.owner = this;
+    hint.tri = best_tri;
     *closest_point = bc;
     *pseudo_normal = bn;
     if (smooth_normal) {

@@ -44,6 +44,8 @@ private:
         uint32_t v[3];
         Vec3 fn;      // unit face normal (zero if degenerate)
         Vec3 en[3];   // unit edge pseudo-normals for edges (v0v1, v1v2, v2v0)
+        Vec3 bc;      // bounding sphere (centre, radius): a cheap lower bound of the distance
+        float br;
         bool degenerate;
     };
     struct Node {

@@ -89,6 +89,7 @@ public:
     const TriMesh& mesh() const { return mesh_; }
     /// Exact SDF for canonical shapes placed by a similarity transform (else the mesh SDF).
     void set_analytic_sdf(std::function<SdfSample(const Vec3&)> f) { analytic_ = std::move(f); }
+    bool has_analytic_sdf() const { return bool(analytic_); }
     /// The BVH/pseudo-normal mesh SDF (built on first use, thread-safe).
     const MeshSdf& mesh_sdf() const;
 
@@ -115,6 +116,7 @@ public:
     std::string kind() const override { return "sphere"; }
     const Vec3& center() const { return c_; }
     float radius() const { return r_; }
+    bool flipped() const { return flip_; }
     /// Exact ray–sphere intersection in double precision; smallest root in (tnear, tfar).
     bool intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float* t) const;
 

@@ -143,8 +143,8 @@ private:
 
 class RoughConductor final : public Bsdf {
 public:
-    RoughConductor(const ConductorIor& ior, const Rgb& spec, MicrofacetType t, float au, float av, bool vis)
-        : ior_(ior), spec_(spec), mf_(t, au, av, vis) {}
+    RoughConductor(const ConductorIor& ior, const Rgb& spec, MicrofacetType t, float au, float av, bool vis, bool hc)
+        : ior_(ior), spec_(spec), mf_(t, au, av, vis, hc) {}
     Rgb eval(const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         Vec3 h = normalize(wo + wi);
@@ -259,8 +259,8 @@ private:
 std::shared_ptr<Bsdf> make_diffuse(const Rgb& r) { return std::make_shared<Diffuse>(r); }
 std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, const Rgb& s) { return std::make_shared<Conductor>(ior, s); }
 std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, const Rgb& s, MicrofacetType t, float au, float av,
-                                           bool vis) {
-    return std::make_shared<RoughConductor>(ior, s, t, au, av, vis);
+                                           bool vis, bool hc) {
+    return std::make_shared<RoughConductor>(ior, s, t, au, av, vis, hc);
 }
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {
     return std::make_shared<Dielectric>(int_ior / ext_ior, r, t);

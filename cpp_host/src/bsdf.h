@@ -52,7 +52,8 @@ bool dielectric_ior_by_name(const std::string& name, float* ior);
 std::shared_ptr<Bsdf> make_diffuse(const Rgb& reflectance);
 std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, const Rgb& specular_reflectance);
 std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, const Rgb& specular_reflectance,
-                                           MicrofacetType type, float alpha_u, float alpha_v, bool sample_visible);
+                                           MicrofacetType type, float alpha_u, float alpha_v, bool sample_visible,
+                                           bool height_correlated = false);
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);
 std::shared_ptr<Bsdf> make_null_bsdf();
 std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> front, std::shared_ptr<Bsdf> back);

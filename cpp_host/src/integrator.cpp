@@ -1,6 +1,8 @@
 // mfhost — volumetric path tracer (see integrator.h).
 #include "integrator.h"
 
+#include "medium_gpis.h"
+
 namespace mf {
 
 namespace {
@@ -51,6 +53,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     float prev_pdf = 0.0f;    // its solid-angle pdf
     Vec3 prev_p = ray.o;      // where it was sampled
     int null_crossings = 0;
+    GpisStart gpis_start;     // where the next gpis segment starts (free, or on the last crossing)
 
     // Next-event estimation: uniform emitter choice, MIS against eval_pdf.
     auto direct = [&](const Vec3& origin, const Medium* m, const Vec3& ref, auto&& eval) -> Rgb {
@@ -83,8 +86,38 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         SurfaceHit hit;
         bool found = scene_.intersect(ray, &hit);
 
+        // ---- gpis region: realize the stochastic surface up to the next surface (the band's
+        // exit or another shape); a crossing is a delta reflection, a miss continues to the
+        // surface. The next segment starts on the crossing (Renewal / Renewal+ memory).
+        if (medium && medium->as_gpis()) {
+            const GpisMedium& g = *medium->as_gpis();
+            GpisHit gh;
+            double tmax = found ? double(hit.t) : double(kInf);
+            if (g.trace(ray.o, ray.d, tmax, gpis_start, sampler.next_u64(), &gh)) {
+                if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
+                Vec3 wi;
+                Rgb w;
+                if (!g.scatter(-ray.d, gh, &wi, &w)) break;
+                beta *= w;
+                if (beta.is_black() || !beta.finite()) break;
+                prev_delta = true;  // a delta lobe: no NEE here, emitters hit next count fully
+                prev_pdf = 0.0f;
+                prev_p = gh.point();
+                gpis_start.on_surface = true;
+                for (int k = 0; k < 3; ++k) {
+                    gpis_start.p[k] = gh.p[k];
+                    gpis_start.gradient[k] = gh.gradient[k];
+                }
+                ray = Ray(gh.point(), wi);
+                ++depth;
+                if (!russian_roulette()) break;
+                continue;
+            }
+        }
+        gpis_start.on_surface = false;  // every other event restarts the realization
+
         // ---- medium: free flight up to the surface (or infinity)
-        if (medium) {
+        if (medium && !medium->as_gpis()) {
             MediumInteraction mi;
             Rgb w, pr;
             float tmax = found ? hit.t : kInf;

@@ -33,6 +33,7 @@ namespace mf {
 
 class Medium;
 class Shape;
+class GpisMedium;
 
 struct MediumInteraction {
     Vec3 p;                  // scattering position
@@ -98,6 +99,9 @@ public:
     virtual Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const = 0;
     virtual const PhaseFunction& phase() const = 0;
     virtual std::string name() const = 0;
+    /// Non-null for <medium type="gpis"> (a realized surface, not a density): the integrator
+    /// traces realizations through it instead of sampling free flights (see medium_gpis.h).
+    virtual const GpisMedium* as_gpis() const { return nullptr; }
 };
 
 class HomogeneousMedium final : public Medium {

@@ -135,13 +135,7 @@ MacrofacetMedium::MacrofacetMedium(mf_medium* handle, std::shared_ptr<const Shap
     : handle_(handle), mean_(std::move(mean)), sigma_(sigma), label_(std::move(label)) {
     phase_ = std::make_shared<MacrofacetPhaseFn>(handle_, label_);
     if (mf_medium_shell_top(handle_, &top_) != MF_OK) throw Error(label_ + ": " + last_error());
-    if (auto mesh = std::dynamic_pointer_cast<const MeshShape>(mean_); mesh && !mesh->has_analytic_sdf()) {
-        Aabb b = mesh->bounds();
-        float grow = float(top_) + 0.05f * max_comp(b.extent());
-        b.lo = b.lo - Vec3(grow);
-        b.hi = b.hi + Vec3(grow);
-        grid_ = std::make_shared<SdfBoundGrid>(*mesh, b, 64);
-    }
+    grid_ = make_sdf_bound_grid(mean_, top_);
     // sigma_t(f, d) = rho(f) * S(d) with S(d) the flakes' projected area against d in the local
     // frame (Eq. 14). On a curved shell the frame turns along a segment, so the majorant uses
     // S_max = max over all directions (relative to the frame; sweeping d over the sphere with a
@@ -312,84 +306,122 @@ Rgb MacrofacetMedium::transmittance(const Ray& ray, float t_max, Sampler& sample
 
 namespace {
 
-/// The bag entry a library message refers to: the longest bag name quoted in the message.
+/// The bag entry a library message refers to: the longest bag name quoted in the message; else
+/// the string parameter whose value the message quotes (e.g. `distribution "ggx" has no ...`).
 const std::pair<std::string, ParamValue>* param_named_in(const MediumParamBag& bag, const std::string& msg) {
     const std::pair<std::string, ParamValue>* best = nullptr;
     for (const auto& kv : bag.params) {
         if (msg.find("\"" + kv.first + "\"") == std::string::npos) continue;
         if (!best || kv.first.size() > best->first.size()) best = &kv;
     }
-    return best;
+    if (best) return best;
+    for (const auto& kv : bag.params)
+        if (kv.second.kind == ParamValue::Kind::String && msg.find(kv.first) != std::string::npos &&
+            msg.find("\"" + kv.second.s + "\"") != std::string::npos)
+            return &kv;
+    return nullptr;
 }
 
+}  // namespace
+
+std::string mf_last_error() { return last_error(); }
+
+Error medium_param_error(const MediumParamBag& bag, const std::string& msg) {
+    const auto* p = param_named_in(bag, msg);
+    return Error(p ? p->second.loc : bag.loc, describe(bag) + ": " + msg);
+}
+
+std::string medium_label(const MediumParamBag& bag) {
+    const std::string what = describe(bag);
+    return bag.loc.str().empty() ? what : bag.loc.str() + ": " + what;
+}
+
+mf_params* bag_to_params(const MediumParamBag& bag, double* sigma_out) {
+    const std::string what = describe(bag);
+    mf_params* params = nullptr;
+    if (mf_params_new(&params) != MF_OK) throw Error(bag.loc, what + ": " + last_error());
+    double sigma = -1;
+    try {
+        for (const auto& kv : bag.params) {
+            const std::string& name = kv.first;
+            const ParamValue& v = kv.second;
+            mf_status st = MF_OK;
+            switch (v.kind) {
+                case ParamValue::Kind::Float: st = mf_params_set_float(params, name.c_str(), v.f); break;
+                case ParamValue::Kind::Int: st = mf_params_set_float(params, name.c_str(), double(v.i)); break;
+                case ParamValue::Kind::Rgb: {
+                    double c[3] = {v.rgb.r, v.rgb.g, v.rgb.b};
+                    st = mf_params_set_rgb(params, name.c_str(), c);
+                    break;
+                }
+                case ParamValue::Kind::String: st = mf_params_set_string(params, name.c_str(), v.s.c_str()); break;
+                case ParamValue::Kind::Bool:
+                    throw Error(v.loc, what + ": parameter \"" + name + "\" is a boolean; " + bag.type +
+                                           " parameters are float, integer, rgb or string");
+            }
+            if (st != MF_OK) throw Error(v.loc, what + ": parameter \"" + name + "\": " + last_error());
+            if (name == "sigma" && (v.kind == ParamValue::Kind::Float || v.kind == ParamValue::Kind::Int))
+                sigma = v.kind == ParamValue::Kind::Float ? v.f : double(v.i);
+            if (name == "variance" && (v.kind == ParamValue::Kind::Float || v.kind == ParamValue::Kind::Int))
+                sigma = std::sqrt(v.kind == ParamValue::Kind::Float ? v.f : double(v.i));
+        }
+    } catch (...) {
+        mf_params_free(params);
+        throw;
+    }
+    if (sigma_out) *sigma_out = sigma;
+    return params;
+}
+
+namespace {
 struct ParamsGuard {
     mf_params* p = nullptr;
     ~ParamsGuard() { mf_params_free(p); }
 };
-
 }  // namespace
 
 std::shared_ptr<Medium> create_macrofacet_medium(const MediumParamBag& bag, const std::shared_ptr<const Shape>& shape) {
     const std::string what = describe(bag);
-    if (bag.type != "macrofacet")
-        throw Error(bag.loc, what + ": \"" + bag.type +
-                                 "\" media are not supported by mfrender (the C ABI exposes macrofacet media only)");
-    ParamsGuard params;
-    if (mf_params_new(&params.p) != MF_OK) throw Error(bag.loc, what + ": " + last_error());
+    if (bag.type != "macrofacet") throw Error(bag.loc, what + ": not a macrofacet medium");
     double sigma = -1;
-    for (const auto& kv : bag.params) {
-        const std::string& name = kv.first;
-        const ParamValue& v = kv.second;
-        mf_status st = MF_OK;
-        switch (v.kind) {
-            case ParamValue::Kind::Float: st = mf_params_set_float(params.p, name.c_str(), v.f); break;
-            case ParamValue::Kind::Int: st = mf_params_set_float(params.p, name.c_str(), double(v.i)); break;
-            case ParamValue::Kind::Rgb: {
-                double c[3] = {v.rgb.r, v.rgb.g, v.rgb.b};
-                st = mf_params_set_rgb(params.p, name.c_str(), c);
-                break;
-            }
-            case ParamValue::Kind::String: st = mf_params_set_string(params.p, name.c_str(), v.s.c_str()); break;
-            case ParamValue::Kind::Bool:
-                throw Error(v.loc, what + ": parameter \"" + name +
-                                       "\" is a boolean; macrofacet parameters are float, integer, rgb or string");
-        }
-        if (st != MF_OK) throw Error(v.loc, what + ": parameter \"" + name + "\": " + last_error());
-        if (name == "sigma" && (v.kind == ParamValue::Kind::Float || v.kind == ParamValue::Kind::Int))
-            sigma = v.kind == ParamValue::Kind::Float ? v.f : double(v.i);
-        if (name == "variance" && (v.kind == ParamValue::Kind::Float || v.kind == ParamValue::Kind::Int))
-            sigma = std::sqrt(v.kind == ParamValue::Kind::Float ? v.f : double(v.i));
-    }
+    ParamsGuard params;
+    params.p = bag_to_params(bag, &sigma);
     mf_medium* handle = nullptr;
-    if (mf_medium_new(params.p, &handle) != MF_OK) {
-        std::string msg = last_error();
-        const auto* p = param_named_in(bag, msg);
-        throw Error(p ? p->second.loc : bag.loc, what + ": " + msg);
-    }
+    if (mf_medium_new(params.p, &handle) != MF_OK) throw medium_param_error(bag, last_error());
     if (!(sigma > 0)) {  // cannot happen after a successful mf_medium_new; keep the handle safe
         mf_medium_free(handle);
         throw Error(bag.loc, what + ": sigma must be positive");
     }
-    std::string label = bag.loc.str().empty() ? what : bag.loc.str() + ": " + what;
-    return std::make_shared<MacrofacetMedium>(handle, shape, sigma, label);
+    return std::make_shared<MacrofacetMedium>(handle, shape, sigma, medium_label(bag));
 }
 
 // ----------------------------------------------------------------------------------------------
 // The region boundary f = top
 
-std::shared_ptr<Shape> make_macrofacet_boundary(const std::shared_ptr<const Shape>& mean,
-                                                const std::shared_ptr<const MacrofacetMedium>& medium) {
-    const float top = float(medium->shell_top());
+std::shared_ptr<const SdfBoundGrid> make_sdf_bound_grid(const std::shared_ptr<const Shape>& mean, double top) {
+    auto mesh = std::dynamic_pointer_cast<const MeshShape>(mean);
+    if (!mesh || mesh->has_analytic_sdf()) return nullptr;
+    Aabb b = mesh->bounds();
+    float grow = float(top) + 0.05f * max_comp(b.extent());
+    b.lo = b.lo - Vec3(grow);
+    b.hi = b.hi + Vec3(grow);
+    return std::make_shared<SdfBoundGrid>(*mesh, b, 64);
+}
+
+std::shared_ptr<Shape> make_region_boundary(const std::shared_ptr<const Shape>& mean, double top_d,
+                                            const std::shared_ptr<const Medium>& medium,
+                                            const std::shared_ptr<const SdfBoundGrid>& grid) {
+    const float top = float(top_d);
     std::shared_ptr<Shape> b;
     if (auto sph = std::dynamic_pointer_cast<const SphereShape>(mean)) {
         // exact: the level set f = top of a sphere is the concentric sphere of radius r +- top
         float r = sph->flipped() ? sph->radius() - top : sph->radius() + top;
         if (!(r > 0))
-            throw Error(mean->loc, "<shape type=\"sphere\">: the macrofacet shell (k*sigma = " + std::to_string(top) +
+            throw Error(mean->loc, "<shape type=\"sphere\">: the " + medium->name() + " shell (" + std::to_string(top) +
                                        ") is thicker than this flipped sphere's radius");
         b = std::make_shared<SphereShape>(sph->center(), r, sph->flipped());
     } else {
-        b = std::make_shared<LevelSetShape>(mean, top, medium->grid());
+        b = std::make_shared<LevelSetShape>(mean, top, grid);
     }
     b->id = mean->id;
     b->loc = mean->loc;

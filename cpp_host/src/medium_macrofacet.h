@@ -23,6 +23,7 @@
 #include "shape.h"
 
 struct mf_medium;
+struct mf_params;
 
 namespace mf {
 
@@ -85,12 +86,30 @@ private:
     mutable std::atomic<uint64_t> violations_{0};
 };
 
-/// The region boundary f = top of a macrofacet medium on its mean shape: a null-BSDF shape
-/// whose interior is `medium` and whose exterior is the mean shape's exterior. Throws mf::Error
-/// (at the mean shape's location) when the offset is impossible (e.g. a flipped sphere thinner
-/// than the shell).
-std::shared_ptr<Shape> make_macrofacet_boundary(const std::shared_ptr<const Shape>& mean,
-                                                const std::shared_ptr<const MacrofacetMedium>& medium);
+/// Shared by the macrofacet and gpis hooks: the parameter bag as an mf_params handle (the caller
+/// frees it with mf_params_free; *sigma = sigma or sqrt(variance) when given, else -1). Throws
+/// mf::Error at the offending parameter's line when the library rejects a value.
+struct mf_params* bag_to_params(const MediumParamBag& bag, double* sigma);
+/// An error for a library message about `bag`, at the line of the parameter the message names
+/// (the longest bag name quoted in it), else at the <medium> element.
+Error medium_param_error(const MediumParamBag& bag, const std::string& msg);
+/// "file:line: <medium type=... id=...>" for messages at run time.
+std::string medium_label(const MediumParamBag& bag);
+/// mf_last_error_message() of this thread as a string.
+std::string mf_last_error();
+
+/// Coarse SDF bounds of a mesh shape without an analytic SDF (null otherwise), covering the
+/// shape's bounds grown by `top` (+5 % of its extent).
+std::shared_ptr<const SdfBoundGrid> make_sdf_bound_grid(const std::shared_ptr<const Shape>& mean, double top);
+
+/// THE region mechanism of the media that live on a mean surface (macrofacet and gpis): the level
+/// set f = top of `mean` as a null-BSDF shape whose interior is `medium` and whose exterior is
+/// the mean shape's exterior — an exact offset sphere for spheres, a sphere-traced
+/// LevelSetShape (with `grid` bounds for mesh SDFs) otherwise. Throws mf::Error (at the mean
+/// shape's location) when the offset is impossible (a flipped sphere thinner than the shell).
+std::shared_ptr<Shape> make_region_boundary(const std::shared_ptr<const Shape>& mean, double top,
+                                            const std::shared_ptr<const Medium>& medium,
+                                            const std::shared_ptr<const SdfBoundGrid>& grid);
 
 /// Embree user geometry for the level set {p : sdf(p) = offset} of a shape, found by sphere
 /// tracing the 1-Lipschitz SDF with a final bisection (see README: tolerance).

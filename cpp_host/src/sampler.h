@@ -33,6 +33,9 @@ public:
         float b = next_1d();
         return {a, b};
     }
+    /// 64 random bits (one dimension): e.g. the seed of a library call that owns its generator
+    /// (mf_gpis_trace), so it is a pure function of (seed, pixel, sample index, dimension).
+    uint64_t next_u64() { return splitmix64(key_ + counter_++ * 0x9E3779B97F4A7C15ull); }
     uint64_t dimension() const { return counter_; }
 
 private:

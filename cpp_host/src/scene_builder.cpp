@@ -6,6 +6,7 @@
 #include <map>
 
 #include "image_io.h"
+#include "medium_gpis.h"
 #include "medium_macrofacet.h"
 
 namespace mf {
@@ -117,7 +118,11 @@ private:
                     au = av = o.has("alpha") ? roughness(o, "alpha") : 0.1f;
                 }
                 bool vis = o.get_bool("sample_visible", true);
-                b = make_rough_conductor(ior, spec, mt, au, av, vis);
+                // mfrender extension: Smith masking-shadowing form (Mitsuba: separable)
+                std::string shadowing = o.get_string("shadowing", "separable");
+                if (shadowing != "separable" && shadowing != "height_correlated")
+                    throw perr(o, "shadowing", "must be \"separable\" or \"height_correlated\", got \"" + shadowing + "\"");
+                b = make_rough_conductor(ior, spec, mt, au, av, vis, shadowing == "height_correlated");
             }
         } else if (t == "dielectric") {
             float ni = ior_value(o, "int_ior", "bk7"), ne = ior_value(o, "ext_ior", "air");
@@ -252,7 +257,7 @@ private:
         auto it = media_.find(&o);
         if (it != media_.end()) return it->second;
         if (o.type != "homogeneous")
-            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, macrofacet)");
+            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, macrofacet, gpis)");
         Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
         Rgb albedo = nonneg_rgb(o, "albedo", Rgb(0.75f));
         if (albedo.max() > 1.0f) throw perr(o, "albedo", "must lie in [0, 1]");
@@ -362,20 +367,28 @@ private:
             if (report_) report_->macrofacet.push_back({mf_bag[k], shape, role});
         }
         if ((mf_bag[0] || mf_bag[1]) && !opts_.allow_macrofacet_placeholders) {
-            // The shape is the mean surface of a macrofacet medium (phase 2): the medium fills
-            // f < k*sigma, and the boundary f = k*sigma replaces the shape in the BVH.
+            // The shape is the mean surface of a macrofacet (or gpis) medium (phase 2): the medium
+            // fills f < top (k*sigma, resp. the gpis envelope), and the boundary f = top replaces
+            // the shape in the BVH (make_region_boundary: one mechanism for both).
+            const std::string kind = (mf_bag[0] ? mf_bag[0] : mf_bag[1])->type;
             if (mf_bag[1])
-                throw Error(mf_bag[1]->loc, o.describe() + ": a macrofacet medium must be the interior of its shape "
+                throw Error(mf_bag[1]->loc, o.describe() + ": a " + kind + " medium must be the interior of its shape "
                                                            "(the shape is its mean surface)");
             if (!bsdfs.empty() && !shape->bsdf->is_null())
-                throw Error(bsdfs[0]->loc, o.describe() + ": the mean surface of a macrofacet medium has no BSDF of "
+                throw Error(bsdfs[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium has no BSDF of "
                                                           "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
-            if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a macrofacet medium cannot be an emitter");
-            auto m = std::static_pointer_cast<const MacrofacetMedium>(
-                create_macrofacet_medium(*mf_bag[0], shape));  // phase 2 hook
+            if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium cannot be an emitter");
             shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
-            scene_->media.push_back(m);
-            scene_->add_shape(make_macrofacet_boundary(shape, m));
+            if (kind == "gpis") {
+                auto g = create_gpis_medium(*mf_bag[0], shape);
+                scene_->media.push_back(g);
+                scene_->add_shape(make_region_boundary(shape, g->envelope(), g, g->grid()));
+            } else {
+                auto m = std::static_pointer_cast<const MacrofacetMedium>(
+                    create_macrofacet_medium(*mf_bag[0], shape));  // phase 2 hook
+                scene_->media.push_back(m);
+                scene_->add_shape(make_region_boundary(shape, m->shell_top(), m, m->grid()));
+            }
             return;
         }
         scene_->add_shape(shape);
@@ -546,7 +559,9 @@ const char* supported_subset_text() {
               area emitter, <medium name="interior|exterior">
   bsdfs       diffuse (reflectance), conductor (material | eta,k; specular_reflectance),
               roughconductor (distribution beckmann|ggx, alpha | alpha_u,alpha_v, material |
-              eta,k, sample_visible), dielectric (int_ior, ext_ior: number or name),
+              eta,k, sample_visible; mfrender extension: shadowing separable (default,
+              Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o))),
+              dielectric (int_ior, ext_ior: number or name),
               null, twosided (one or two nested bsdfs)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
@@ -554,6 +569,10 @@ const char* supported_subset_text() {
               C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
               lengthscale*, micro_bsdf, material | eta,k, specular_reflectance,
               reflectance, vndf_sampling, mixture_ratio)
+              gpis (realization-based ground truth; as the interior of its mean-surface
+              shape; the macrofacet names that apply: sigma | variance, shell_extent,
+              distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,
+              specular_reflectance; plus memory renewal|renewal_plus, step_correlation)
   emitters    area (radiance), point (position | to_world, intensity), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)

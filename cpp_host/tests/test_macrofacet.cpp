@@ -295,25 +295,11 @@ static std::string thin_scene(const std::string& object, int spp) {
               <emitter type="constant"><rgb name="radiance" value="0.4, 0.5, 0.6"/></emitter></scene>)";
 }
 
-static void thin_shell(const std::string& name, const std::string& dist, const std::string& alpha, const std::string& material) {
-    const int spp = 256;
-    std::string mfobj = medium_xml("m", "<float name=\"sigma\" value=\"0.001\"/><string name=\"distribution\" value=\"" + dist +
-                                            "\"/><float name=\"alpha\" value=\"" + alpha + "\"/><string name=\"material\" value=\"" +
-                                            material + "\"/>") +
-                        R"(<shape type="sphere"><ref name="interior" id="m"/></shape>)";
-    std::string rcobj = "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"" + dist +
-                        "\"/><float name=\"alpha\" value=\"" + alpha + "\"/><string name=\"material\" value=\"" + material +
-                        "\"/></bsdf></shape>";
-    write_file(work(name + "_mf.xml"), thin_scene(mfobj, spp));
-    write_file(work(name + "_rc.xml"), thin_scene(rcobj, spp));
-    CHECK(run({work(name + "_mf.xml"), "-o", work(name + "_mf.exr"), "--quiet", "--seed", "3"}) == 0);
-    CHECK(run({work(name + "_rc.xml"), "-o", work(name + "_rc.exr"), "--quiet", "--seed", "4"}) == 0);
-    Image a = read_exr(work(name + "_mf.exr")), b = read_exr(work(name + "_rc.exr"));
-    // pixel mask: the pixel centre's camera ray hits the unit sphere with cos(view, n) >= 0.35
-    const int W = a.width, H = a.height;
+// The camera rays of the thin-shell scene's pixel centres that hit the unit sphere with
+// cos(view, n) >= 0.35 (the mask), as (pixel index, direction).
+static std::vector<std::pair<size_t, Vec3>> thin_mask(int W, int H, float cos_min = 0.35f) {
     const float th = std::tan(0.5f * 22.0f * kPi / 180.0f);
-    std::vector<double> diff, vals;
-    double sa = 0, sb = 0;
+    std::vector<std::pair<size_t, Vec3>> px;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
             // camera at +4z looking at the origin, up +y: image x -> world -x... the mask is symmetric
@@ -324,41 +310,183 @@ static void thin_shell(const std::string& name, const std::string& dist, const s
             if (disc <= 0) continue;
             float t = -bq - std::sqrt(disc);
             Vec3 n = normalize(o + d * t);
-            if (dot(n, -d) < 0.35f) continue;
-            for (int ch = 0; ch < 3; ++ch) {
-                size_t i = 3 * (size_t(y) * W + x) + ch;
-                diff.push_back(double(a.rgb[i]) - double(b.rgb[i]));
-                vals.push_back(double(a.rgb[i]) + double(b.rgb[i]));
-                sa += a.rgb[i];
-                sb += b.rgb[i];
-            }
+            if (dot(n, -d) < cos_min) continue;
+            px.push_back({size_t(y) * W + x, d});
         }
+    return px;
+}
+
+struct PairStats {
+    double n = 0, rel = 0, md = 0, se = 0, mean_z = 0, sd_z = 0, max_z = 0;
+    int over3 = 0, over45 = 0;
+};
+
+// a - b over the mask: the mean relative difference sum(a - b) / sum(b), the mean difference with
+// its standard error (from the spread of the pixel-wise differences), and per-pixel z-scores
+// with a brightness-dependent noise model var_i = k (a_i + b_i) (shot-noise like: the highlight
+// is noisier than the dark limb), k fitted over the mask (so sd(z) = 1 by construction; the tail
+// counts and the mean z are the information).
+static PairStats compare_masked(const Image& a, const Image& b, const std::vector<std::pair<size_t, Vec3>>& mask) {
+    std::vector<double> diff, vals;
+    double sa = 0, sb = 0;
+    for (const auto& m : mask)
+        for (int ch = 0; ch < 3; ++ch) {
+            size_t i = 3 * m.first + ch;
+            diff.push_back(double(a.rgb[i]) - double(b.rgb[i]));
+            vals.push_back(double(a.rgb[i]) + double(b.rgb[i]));
+            sa += a.rgb[i];
+            sb += b.rgb[i];
+        }
+    PairStats st;
     const double n = double(diff.size());
+    st.n = n;
     double md = 0, v = 0;
     for (double d : diff) md += d / n;
     for (double d : diff) v += (d - md) * (d - md) / (n - 1);
-    double sd = std::sqrt(v), se = sd / std::sqrt(n), mean_b = sb / n;
-    // per-pixel z-scores with a brightness-dependent noise model var_i = k (a_i + b_i) (shot-noise
-    // like: the highlight is noisier than the dark limb), k fitted over the mask
+    st.md = md;
+    st.se = std::sqrt(v / n);
+    st.rel = (sa - sb) / sb;
     double sum_d2 = 0, sum_ab = 0;
     for (size_t i = 0; i < diff.size(); ++i) {
-        sum_d2 += (diff[i] - md) * (diff[i] - md);
+        sum_d2 += diff[i] * diff[i];
         sum_ab += vals[i];
     }
-    double k = sum_d2 / std::max(sum_ab, 1e-12);
-    int outliers = 0;
-    for (size_t i = 0; i < diff.size(); ++i) outliers += std::fabs(diff[i] - md) / std::sqrt(k * std::max(vals[i], 1e-6)) > 4.5;
-    double rel = (sa - sb) / sb;
-    CHECK_MSG(std::fabs(rel) < 0.015, name + ": mean relative difference " + std::to_string(rel));
-    CHECK_MSG(std::fabs(md) < 4.5 * se + 0.005 * mean_b, name + ": mean difference " + std::to_string(md) + " se " + std::to_string(se));
-    CHECK_MSG(outliers < 0.005 * n, name + ": " + std::to_string(outliers) + " of " + std::to_string(int(n)) + " pixel values with |z| > 4.5");
-    std::printf("  %s: %d masked pixel values, mean rel diff %+.4f, mean diff %.5f = %.2f se, |z|>4.5: %d\n", name.c_str(),
-                int(n), rel, md, md / se, outliers);
+    double k = sum_d2 / std::max(sum_ab, 1e-12), sz = 0, sz2 = 0;
+    for (size_t i = 0; i < diff.size(); ++i) {
+        double z = diff[i] / std::sqrt(k * std::max(vals[i], 1e-6));
+        sz += z;
+        sz2 += z * z;
+        st.max_z = std::max(st.max_z, std::fabs(z));
+        st.over3 += std::fabs(z) > 3;
+        st.over45 += std::fabs(z) > 4.5;
+    }
+    st.mean_z = sz / n;
+    st.sd_z = std::sqrt(std::max(0.0, sz2 / n - st.mean_z * st.mean_z));
+    return st;
+}
+
+// Predicted ratio sum(separable) / sum(height-correlated) over the mask, by quadrature at the
+// pixel centres: for each masked pixel, the single-scattering radiance = the mean over a 64x64
+// stratified grid of BSDF (VNDF) samples of weight × (the area light's radiance where the sampled
+// direction hits it, else the environment). The two modes share the sampling (the VNDF pdf has
+// G1 only), so the grid is the same and only the weights differ.
+static double predicted_ratio(const std::string& sep_xml, const std::string& hc_xml, float cos_min) {
+    auto s_sep = build_scene(parse_scene_string(sep_xml, "sep.xml", {}), BuildOptions(), nullptr);
+    auto s_hc = build_scene(parse_scene_string(hc_xml, "hc.xml", {}), BuildOptions(), nullptr);
+    const Emitter* env = s_sep->infinite_emitters().empty() ? nullptr : s_sep->infinite_emitters()[0];
+    const int G = 64;
+    double sum[2] = {0, 0};
+    for (const auto& m : thin_mask(40, 40, cos_min)) {
+        for (int mode = 0; mode < 2; ++mode) {
+            const Scene& sc = mode == 0 ? *s_sep : *s_hc;
+            SurfaceHit h;
+            if (!sc.intersect(Ray(Vec3(0, 0, 4), m.second), &h)) continue;
+            Frame fr(h.ns);
+            Vec3 wo_l = fr.to_local(-m.second);
+            Rgb acc(0.0f);
+            for (int i = 0; i < G; ++i)
+                for (int j = 0; j < G; ++j) {
+                    BsdfSample bs;
+                    if (!h.shape->bsdf->sample(wo_l, 0.5f, Vec2((i + 0.5f) / G, (j + 0.5f) / G), &bs)) continue;
+                    Vec3 wi = fr.to_world(bs.wi);
+                    SurfaceHit lh;
+                    Rgb Li(0.0f);
+                    if (sc.intersect(Ray(h.p + h.ng * 1e-4f, wi), &lh)) {
+                        if (lh.shape->emitter) Li = lh.shape->emitter->eval_surface(lh, -wi);
+                    } else if (env) {
+                        Li = env->eval_direction(wi);
+                    }
+                    acc += bs.weight * Li;
+                }
+            sum[mode] += (acc.r + acc.g + acc.b) / double(G * G);
+        }
+    }
+    return sum[0] / sum[1];
+}
+
+static std::string rc_object(const std::string& dist, const std::string& alpha, const std::string& material,
+                             const std::string& shadowing) {
+    return "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"" + dist +
+           "\"/><float name=\"alpha\" value=\"" + alpha + "\"/><string name=\"material\" value=\"" + material +
+           "\"/><string name=\"shadowing\" value=\"" + shadowing + "\"/></bsdf></shape>";
+}
+
+// separable vs height_correlated roughconductor in the thin-shell scene, rendered with the same
+// seed (identical sampled directions: only the G weights differ, so the ratio of image sums is
+// nearly noise-free). Pixels whose centre sees the sphere at cos >= 0.3 (fully covered pixels,
+// silhouette included). The ratio must be < 1 (G1 G1 <= G2) and match the quadrature prediction
+// within 10 % of the deficit + 4.5 SE + 2e-5 (float accumulation).
+static void separable_deficit(const std::string& name, const std::string& hc_exr, const std::string& dist,
+                              const std::string& alpha, const std::string& material, int spp, bool render_hc) {
+    const std::string hc_xml = thin_scene(rc_object(dist, alpha, material, "height_correlated"), spp);
+    const std::string sep_xml = thin_scene(rc_object(dist, alpha, material, "separable"), spp);
+    if (render_hc) {
+        write_file(work(name + "_hc.xml"), hc_xml);
+        CHECK(run({work(name + "_hc.xml"), "-o", hc_exr, "--quiet", "--seed", "4"}) == 0);
+    }
+    write_file(work(name + "_sep.xml"), sep_xml);
+    CHECK(run({work(name + "_sep.xml"), "-o", work(name + "_sep.exr"), "--quiet", "--seed", "4"}) == 0);
+    Image hc = read_exr(hc_exr), sep = read_exr(work(name + "_sep.exr"));
+    const auto mask = thin_mask(hc.width, hc.height, 0.3f);
+    double ssep = 0, shc = 0;
+    for (const auto& m : mask)
+        for (int ch = 0; ch < 3; ++ch) {
+            ssep += sep.rgb[3 * m.first + ch];
+            shc += hc.rgb[3 * m.first + ch];
+        }
+    const double ratio = ssep / shc;
+    double ve = 0;
+    const double n = 3.0 * double(mask.size());
+    for (const auto& m : mask)
+        for (int ch = 0; ch < 3; ++ch) {
+            double e = sep.rgb[3 * m.first + ch] - ratio * hc.rgb[3 * m.first + ch];
+            ve += e * e / (n - 1);
+        }
+    const double ratio_se = std::sqrt(ve * n) / shc;  // delta method
+    const double pred = predicted_ratio(thin_scene(rc_object(dist, alpha, material, "separable"), 1),
+                                        thin_scene(rc_object(dist, alpha, material, "height_correlated"), 1), 0.3f);
+    CHECK_MSG(ratio <= 1.0 + 2e-5, name + ": separable/height_correlated = " + std::to_string(ratio) + " > 1");
+    CHECK_MSG(std::fabs(ratio - pred) < 0.1 * (1 - pred) + 4.5 * ratio_se + 2e-5,
+              name + ": separable/height_correlated = " + std::to_string(ratio) + " vs predicted " + std::to_string(pred));
+    std::printf("  %s: separable/height_correlated = %.6f (se %.6f), predicted %.6f (deficit %.4f %%)\n", name.c_str(), ratio,
+                ratio_se, pred, 100 * (1 - pred));
+}
+
+static void thin_shell(const std::string& name, const std::string& dist, const std::string& alpha, const std::string& material) {
+    const int spp = 256;
+    // sigma = 1e-4 r: the shell's finite-thickness bias (measured ~ +1.5 sigma/r, README) is then
+    // ~20x below the Monte Carlo standard error, so no allowance is needed
+    std::string mfobj = medium_xml("m", "<float name=\"sigma\" value=\"0.0001\"/><string name=\"distribution\" value=\"" + dist +
+                                            "\"/><float name=\"alpha\" value=\"" + alpha + "\"/><string name=\"material\" value=\"" +
+                                            material + "\"/>") +
+                        R"(<shape type="sphere"><ref name="interior" id="m"/></shape>)";
+    write_file(work(name + "_mf.xml"), thin_scene(mfobj, spp));
+    write_file(work(name + "_hc.xml"), thin_scene(rc_object(dist, alpha, material, "height_correlated"), spp));
+    CHECK(run({work(name + "_mf.xml"), "-o", work(name + "_mf.exr"), "--quiet", "--seed", "3"}) == 0);
+    CHECK(run({work(name + "_hc.xml"), "-o", work(name + "_hc.exr"), "--quiet", "--seed", "4"}) == 0);
+    Image a = read_exr(work(name + "_mf.exr")), hc = read_exr(work(name + "_hc.exr"));
+    const auto mask = thin_mask(a.width, a.height);
+
+    // thin shell vs height-correlated roughconductor: no allowance beyond Monte Carlo error
+    PairStats st = compare_masked(a, hc, mask);
+    CHECK_MSG(std::fabs(st.md) < 4.5 * st.se, name + ": macrofacet - height_correlated mean difference " +
+                                                  std::to_string(st.md) + " = " + std::to_string(st.md / st.se) + " se");
+    // |z| > 4.5 has probability 7e-6 for a normal z; the fitted shot-noise model is only
+    // approximate in the highlight (heavier tails at 256 spp): allow 3 in 1000
+    CHECK_MSG(st.over45 <= 0.003 * st.n, name + ": " + std::to_string(st.over45) + " of " + std::to_string(int(st.n)) +
+                                            " pixel values with |z| > 4.5");
+    std::printf("  %s: mf vs rc(height_correlated): %d masked values, mean rel diff %+.5f, mean diff %+.6f = %+.2f se;"
+                " z: mean %+.4f sd %.3f max|z| %.2f, |z|>3: %d (%.2f%%, normal 0.27%%), |z|>4.5: %d\n",
+                name.c_str(), int(st.n), st.rel, st.md, st.md / st.se, st.mean_z, st.sd_z, st.max_z, st.over3,
+                100.0 * st.over3 / st.n, st.over45);
+    separable_deficit(name, work(name + "_hc.exr"), dist, alpha, material, spp, false);
 }
 
 TEST_CASE(thin_shell_vs_roughconductor) {
     thin_shell("thin_beckmann_Au", "beckmann", "0.3", "Au");
     thin_shell("thin_ggx_none", "ggx", "0.2", "none");
+    // a rough GGX (long tails, Lambda far from 0 at the limb): a clearly measurable deficit
+    separable_deficit("shadowing_ggx_rough", work("shadowing_ggx_rough_hc.exr"), "ggx", "0.6", "none", 64, true);
 }
 
 // ------------------------------------------------------------------------------------------

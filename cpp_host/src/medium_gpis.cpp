@@ -1,0 +1,137 @@
+// mfhost — the gpis medium through the C ABI (see medium_gpis.h and README.md).
+#include "medium_gpis.h"
+
+#include <cmath>
+#include <exception>
+#include <limits>
+
+#include "medium_macrofacet.h"
+
+namespace mf {
+namespace {
+
+/// mf_sdf_fn over a Shape: its SDF and gradient (world space). Must not unwind: an exception is
+/// reported as NaN, which makes the trace fail with a status (turned into an mf::Error).
+extern "C" void shape_sdf_callback(void* user_data, mf_vec3 p, mf_sdf_sample* out) {
+    const Shape* shape = static_cast<const Shape*>(user_data);
+    try {
+        SdfSample s = shape->sdf(Vec3(float(p.x), float(p.y), float(p.z)));
+        out->f = s.f;
+        out->gradient = mf_vec3{s.grad.x, s.grad.y, s.grad.z};
+    } catch (...) {
+        out->f = std::numeric_limits<double>::quiet_NaN();
+        out->gradient = mf_vec3{0, 0, 0};
+    }
+}
+
+mf_vec3 unit_d(const Vec3& v) {
+    double x = v.x, y = v.y, z = v.z, l = std::sqrt(x * x + y * y + z * z);
+    if (!(l > 0)) return mf_vec3{0, 0, 1};
+    return mf_vec3{x / l, y / l, z / l};
+}
+
+/// Never used by the integrator (gpis vertices are delta reflections it handles itself): a delta
+/// lobe has no density, so eval/pdf are 0 and sample reflects with pdf 0.
+class GpisPhase final : public PhaseFunction {
+public:
+    explicit GpisPhase(const GpisMedium* m) : m_(m) {}
+    Rgb eval(const MediumInteraction&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const MediumInteraction&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const MediumInteraction& mi, const Vec3& wo, Sampler&, Vec3* wi, float* pdf, Rgb* weight) const override {
+        GpisHit h;
+        h.normal[0] = mi.frame_n.x;
+        h.normal[1] = mi.frame_n.y;
+        h.normal[2] = mi.frame_n.z;
+        *pdf = 0.0f;
+        return m_->scatter(wo, h, wi, weight);
+    }
+
+private:
+    const GpisMedium* m_;
+};
+
+}  // namespace
+
+GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const Shape> mean, std::string label)
+    : handle_(handle), mean_(std::move(mean)), label_(std::move(label)) {
+    phase_ = std::make_shared<GpisPhase>(this);
+    if (mf_gpis_envelope(handle_, &envelope_) != MF_OK || !(envelope_ > 0)) {
+        std::string msg = mf_last_error();
+        mf_gpis_free(handle_);
+        throw Error(label_ + ": mf_gpis_envelope failed: " + msg);
+    }
+    grid_ = make_sdf_bound_grid(mean_, envelope_);
+}
+
+GpisMedium::~GpisMedium() { mf_gpis_free(handle_); }
+
+bool GpisMedium::trace(const Vec3& o, const Vec3& d, double t_max, const GpisStart& start, uint64_t seed,
+                       GpisHit* hit) const {
+    if (!(t_max > 0)) return false;
+    mf_gpis_start st;
+    mf_vec3 origin;
+    if (start.on_surface) {
+        st.kind = MF_GPIS_START_ON_SURFACE;
+        st.gradient = mf_vec3{start.gradient[0], start.gradient[1], start.gradient[2]};
+        origin = mf_vec3{start.p[0], start.p[1], start.p[2]};
+    } else {
+        st.kind = MF_GPIS_START_FREE;
+        st.gradient = mf_vec3{0, 0, 0};
+        origin = mf_vec3{o.x, o.y, o.z};
+    }
+    mf_gpis_hit h;
+    const double tm = std::isfinite(t_max) ? t_max : std::numeric_limits<double>::infinity();
+    if (mf_gpis_trace(handle_, shape_sdf_callback, const_cast<Shape*>(mean_.get()), origin, unit_d(d), tm, &st, seed,
+                      &h) != MF_OK)
+        throw Error(label_ + ": mf_gpis_trace failed: " + mf_last_error());
+    if (!h.hit) return false;
+    hit->t = h.t;
+    hit->p[0] = h.point.x, hit->p[1] = h.point.y, hit->p[2] = h.point.z;
+    hit->normal[0] = h.normal.x, hit->normal[1] = h.normal.y, hit->normal[2] = h.normal.z;
+    hit->gradient[0] = h.gradient.x, hit->gradient[1] = h.gradient.y, hit->gradient[2] = h.gradient.z;
+    return true;
+}
+
+bool GpisMedium::scatter(const Vec3& wo, const GpisHit& hit, Vec3* wi, Rgb* weight) const {
+    double nx = hit.normal[0], ny = hit.normal[1], nz = hit.normal[2], l = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!(l > 0)) return false;
+    mf_phase_sample_result s;
+    if (mf_gpis_scatter(handle_, unit_d(wo), mf_vec3{nx / l, ny / l, nz / l}, &s) != MF_OK)
+        throw Error(label_ + ": mf_gpis_scatter failed: " + mf_last_error());
+    if (!s.valid) return false;
+    *wi = Vec3(float(s.wo.x), float(s.wo.y), float(s.wo.z));
+    *weight = Rgb(float(s.weight.r), float(s.weight.g), float(s.weight.b));
+    return weight->finite();
+}
+
+bool GpisMedium::sample_free_flight(const Ray& ray, float t_max, int, Sampler& sampler, MediumInteraction* mi,
+                                    Rgb* weight, Rgb* pdf_ratio) const {
+    *weight = Rgb(1.0f);
+    *pdf_ratio = Rgb(1.0f);
+    GpisHit h;
+    if (!trace(ray.o, ray.d, t_max, GpisStart(), sampler.next_u64(), &h)) return false;
+    mi->t = float(h.t);
+    mi->p = h.point();
+    mi->wo = -ray.d;
+    mi->frame_n = h.n();
+    mi->medium = this;
+    return true;
+}
+
+Rgb GpisMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
+    GpisHit h;
+    return trace(ray.o, ray.d, t_max, GpisStart(), sampler.next_u64(), &h) ? Rgb(0.0f) : Rgb(1.0f);
+}
+
+std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, const std::shared_ptr<const Shape>& shape) {
+    if (bag.type != "gpis") throw Error(bag.loc, "not a gpis medium");
+    mf_params* params = bag_to_params(bag, nullptr);
+    mf_gpis* handle = nullptr;
+    mf_status st = mf_gpis_new(params, &handle);
+    std::string msg = st == MF_OK ? std::string() : mf_last_error();
+    mf_params_free(params);
+    if (st != MF_OK) throw medium_param_error(bag, msg);
+    return std::make_shared<GpisMedium>(handle, shape, medium_label(bag));
+}
+
+}  // namespace mf

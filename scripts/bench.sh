@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Speed figures (never asserted by tests): the core's per-call costs and mfrender on the design
+# notes' Mitsuba 3 anchor scenes (bench/anchor.xml), printed beside Mitsuba 3.9.1's times on the
+# same 2-core machine kind. Usage: scripts/bench.sh [--quick]   (--quick: 128x128, 16 spp)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$HOME/.cargo/bin:$PATH"
+scripts/setup.sh
+
+echo "== core queries (cargo run --release --example bench_core)"
+cargo run --release --quiet --example bench_core
+
+build_dir=build/bench
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMF_BUILD_TESTS=OFF >/dev/null
+cmake --build "$build_dir" -j "$(nproc)" --target mfrender >/dev/null
+mfrender="$(find "$build_dir" -name mfrender -type f -perm -u+x | head -n 1)"
+
+res=512 spp=64
+if [ "${1:-}" = "--quick" ]; then res=128 spp=16; fi
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+declare -A mitsuba=([homogeneous]="scalar_rgb 10.5 s, llvm_ad_rgb 7.0 s" [roughconductor]="scalar_rgb 5.5 s, llvm_ad_rgb 1.45 s" [macrofacet]="(no Mitsuba counterpart)")
+echo "== mfrender on bench/anchor.xml, ${res}x${res} at ${spp} spp, $(nproc) threads"
+for object in homogeneous roughconductor macrofacet; do
+    start=$(date +%s%N)
+    "$mfrender" bench/anchor.xml -D object="$object" -D res="$res" -D spp="$spp" -o "$out/$object.exr" --quiet
+    end=$(date +%s%N)
+    seconds=$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.2f", (b - a) / 1e9 }')
+    printf '%-15s %7s s    Mitsuba 3.9.1 at 512x512/64 spp: %s\n' "$object" "$seconds" "${mitsuba[$object]}"
+done

@@ -10,6 +10,7 @@
 
 mod common;
 
+use common::reference::h_function;
 use common::{gauss_legendre, spherical};
 use glam::DVec3;
 use macrofacet::height::HeightProfile;
@@ -18,24 +19,6 @@ use macrofacet::slab::reflected_density;
 use macrofacet::stats::{mean_and_standard_error, Pcg32};
 use macrofacet::{MacrofacetMedium, MacrofacetPhase, MicroBsdf, VndfSampling};
 use std::f64::consts::PI;
-
-/// Chandrasekhar's H-function by Eq. 31 (64-point Gauss–Legendre on 16 panels; the integrand
-/// has an integrable log singularity at t = π/2 only when a = 1).
-fn h_function(mu: f64, albedo: f64) -> f64 {
-    let gl = gauss_legendre(64);
-    let panels = 16;
-    let mut integral = 0.0;
-    for p in 0..panels {
-        let (a, b) = (0.5 * PI * p as f64 / panels as f64, 0.5 * PI * (p + 1) as f64 / panels as f64);
-        for &(x, w) in &gl {
-            let t: f64 = 0.5 * (a + b) + 0.5 * (b - a) * x;
-            let t_cot_t = if t < 1e-8 { 1.0 } else { t / t.tan() };
-            let (s, c) = t.sin_cos();
-            integral += 0.5 * (b - a) * w * (1.0 - albedo * t_cot_t).ln() / (c * c + mu * mu * s * s);
-        }
-    }
-    (-mu / PI * integral).exp()
-}
 
 fn isotropic_slab(albedo: f64) -> MacrofacetMedium {
     let alpha = 1e4;

@@ -465,16 +465,22 @@ pub fn heitz_nee(dist: &Dist, eta: [f64; 3], k: [f64; 3], wi: DVec3, wos: &[DVec
 /// (32 panels of 16-point Gauss–Legendre; the integrand is smooth for `a < 1`).
 pub fn h_function(mu: f64, a: f64) -> f64 {
     let gl = gauss_legendre(16);
-    let integral = integrate(
-        |t| {
-            let t_cot = if t < 1e-8 { 1.0 } else { t / t.tan() };
-            let (s, c) = t.sin_cos();
-            (1.0 - a * t_cot).ln() / (c * c + mu * mu * s * s)
-        },
-        0.0,
-        0.5 * PI,
-        32,
-        &gl,
-    );
-    (-mu / PI * integral).exp()
+    let integrand = |t: f64| {
+        // 1 - a t cot t = (1 - a) + a (1 - t cot t), the latter by its series for small t
+        // (t cot t rounds to 1 there).
+        let t2 = t * t;
+        let one_minus_t_cot = if t < 1e-2 { t2 / 3.0 + t2 * t2 / 45.0 + 2.0 * t2 * t2 * t2 / 945.0 } else { 1.0 - t / t.tan() };
+        let (s, c) = t.sin_cos();
+        ((1.0 - a) + a * one_minus_t_cot).ln() / (c * c + mu * mu * s * s)
+    };
+    // Panels halving toward t = 0, where a = 1 gives a logarithmic singularity (1 - t cot t ~ t²/3);
+    // what is left below 2^-40 π/2 contributes below 1e-10.
+    (0..40)
+        .map(|k| {
+            let hi = 0.5 * PI * 0.5f64.powi(k);
+            integrate(integrand, 0.5 * hi, hi, 1, &gl)
+        })
+        .sum::<f64>()
+        .mul_add(-mu / PI, 0.0)
+        .exp()
 }

@@ -4,28 +4,12 @@
 use glam::DVec3;
 use std::f64::consts::PI;
 
-/// Gauss–Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
-pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            loop {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                let dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-15 {
-                    return (x, 2.0 / ((1.0 - x * x) * dp * dp));
-                }
-            }
-        })
-        .collect()
-}
+/// The independent reference formulas of the validation report (Gauss–Legendre quadrature, the
+/// Heitz 2016 random walk, Chandrasekhar's H-function, ...), shared so that each exists once.
+#[path = "../../examples/validate/reference.rs"]
+pub mod reference;
+
+pub use reference::gauss_legendre;
 
 /// `∫_{S²} f(ω) dω` with Gauss–Legendre panels in θ graded toward both poles (where peaked NDFs
 /// concentrate) and in φ. `panels` per hemisphere in θ, `n_phi` panels in φ, 8 nodes each.

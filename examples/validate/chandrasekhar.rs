@@ -77,7 +77,7 @@ pub fn run(ctx: &Ctx) -> Section {
          direction-independent projected area (relative anisotropy O(1/α)). A semi-infinite slab of such flakes with \
          reflectance a (`material = none`, `specular_reflectance = a`; σ = 1, top at +8σ) is the classic \
          semi-infinite isotropic medium. Chandrasekhar: single scattering (Eq. 25) `f₁ = a / (4π (μi + μo))`, all \
-         orders (Eq. 30) `f_r = a H(μi) H(μo) / (4π (μi + μo))`, with H from Eq. 31 (32 × 16-point Gauss–Legendre; \
+         orders (Eq. 30) `f_r = a H(μi) H(μo) / (4π (μi + μo))`, with H from Eq. 31 (16-point Gauss–Legendre on 40 panels halving toward t = 0; \
          checked below against the moment identity ∫₀¹ H dμ = 2(1 − √(1−a))/a).\n\n\
          - Estimator: next-event estimation along `slab::walk_from` (the estimator of `slab::reflected_density`, for \
          all wo at once): every event adds `weight · p(wi_event, wo) · T(f → top along wo) / μo`; the first event \

@@ -3,11 +3,11 @@
 use crate::bruteforce::Track;
 use crate::reference::{normal_cdf, Dist};
 use crate::plot::{Band, Figure, LegendPos, Panel, Series, BLUE, GRAY, GREEN, ORANGE, RED};
-use crate::util::{downward, md_table, par_map, yes_no, Ctx, Section};
+use crate::util::{downward, kernel_cases, md_table, par_map, yes_no, Ctx, Section};
 use glam::DVec3;
-use macrofacet::gpis::{transmittance_curve, GpisTracer, MarchSettings, Plane, SeKernel};
+use macrofacet::gpis::{transmittance_curve, GpisTracer, MarchSettings, Plane};
 use macrofacet::height::HeightProfile;
-use macrofacet::ndf::{Beckmann, Gpss, Ndf};
+use macrofacet::ndf::Ndf;
 use macrofacet::stats::Pcg32;
 use macrofacet::{MacrofacetMedium, MacrofacetPhase, MicroBsdf, VndfSampling};
 use std::f64::consts::SQRT_2;
@@ -16,32 +16,6 @@ use std::fmt::Write as _;
 const SEED: u64 = 1_000;
 const F0: f64 = 3.0;
 
-struct Case {
-    label: &'static str,
-    file: &'static str,
-    kernel: SeKernel,
-    ndf: Ndf,
-    ndf_label: &'static str,
-}
-
-fn cases() -> Vec<Case> {
-    vec![
-        Case {
-            label: "height field (l_z = ∞)",
-            file: "height_field",
-            kernel: SeKernel::from_roughness(1.0, DVec3::new(1.0, 1.0, 0.0)).unwrap(),
-            ndf: Ndf::Beckmann(Beckmann::new(1.0, 1.0).unwrap()),
-            ndf_label: "Beckmann α = 1 (= gpss α_z = 0)",
-        },
-        Case {
-            label: "isotropic (l_x = l_y = l_z)",
-            file: "isotropic",
-            kernel: SeKernel::from_roughness(1.0, DVec3::ONE).unwrap(),
-            ndf: Ndf::Gpss(Gpss::new(1.0, 1.0, 1.0).unwrap()),
-            ndf_label: "gpss α = α_z = 1",
-        },
-    ]
-}
 
 fn medium(ndf: Ndf) -> MacrofacetMedium {
     MacrofacetMedium {
@@ -84,7 +58,7 @@ pub fn run(ctx: &Ctx) -> Section {
     let (n, chunks) = if ctx.quick { (4_000, 2) } else { (200_000, 20) };
     let n_fine = n / 4;
     let heights: Vec<f64> = (0..=120).map(|i| F0 - 0.05 * i as f64).collect();
-    let cases = cases();
+    let cases = kernel_cases();
     let mut jobs = Vec::new();
     for c in 0..cases.len() {
         for a in 0..angles.len() {

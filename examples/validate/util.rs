@@ -140,3 +140,36 @@ pub fn downward(theta_deg: f64) -> glam::DVec3 {
 pub fn yes_no(ok: bool) -> String {
     if ok { "yes".into() } else { "**NO**".into() }
 }
+
+/// The two GPSS kernels the realization comparisons use (σ = 1, α = 1), each with the NDF the
+/// macrofacet model gives it: the height field (`l_z = ∞`) ↔ Beckmann, the isotropic kernel ↔ the
+/// generalized macrofacet with `α_z = α`.
+pub struct KernelCase {
+    pub label: &'static str,
+    pub file: &'static str,
+    pub kernel: macrofacet::gpis::SeKernel,
+    pub ndf: macrofacet::ndf::Ndf,
+    pub ndf_label: &'static str,
+}
+
+pub fn kernel_cases() -> Vec<KernelCase> {
+    use glam::DVec3;
+    use macrofacet::gpis::SeKernel;
+    use macrofacet::ndf::{Beckmann, Gpss, Ndf};
+    vec![
+        KernelCase {
+            label: "height field (l_z = ∞)",
+            file: "height_field",
+            kernel: SeKernel::from_roughness(1.0, DVec3::new(1.0, 1.0, 0.0)).unwrap(),
+            ndf: Ndf::Beckmann(Beckmann::new(1.0, 1.0).unwrap()),
+            ndf_label: "Beckmann α = 1 (= gpss α_z = 0)",
+        },
+        KernelCase {
+            label: "isotropic (l_x = l_y = l_z)",
+            file: "isotropic",
+            kernel: SeKernel::from_roughness(1.0, DVec3::ONE).unwrap(),
+            ndf: Ndf::Gpss(Gpss::new(1.0, 1.0, 1.0).unwrap()),
+            ndf_label: "gpss α = α_z = 1",
+        },
+    ]
+}

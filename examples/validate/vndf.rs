@@ -3,10 +3,10 @@
 use crate::bruteforce::Track;
 use crate::plot::{Figure, LegendPos, Panel, Series, BLUE, RED};
 use crate::reference::gauss_legendre;
-use crate::util::{downward, md_table, par_map, yes_no, Ctx, Section};
+use crate::util::{downward, kernel_cases, md_table, par_map, yes_no, Ctx, Section};
 use glam::DVec3;
-use macrofacet::gpis::{visible_normals, GpisTracer, MarchSettings, Plane, SeKernel};
-use macrofacet::ndf::{Beckmann, Gpss, MicrofacetDistribution, Ndf};
+use macrofacet::gpis::{visible_normals, GpisTracer, MarchSettings, Plane};
+use macrofacet::ndf::MicrofacetDistribution;
 use macrofacet::stats::Pcg32;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -22,13 +22,6 @@ const PHI_2D: usize = 18;
 const MU_FINE: usize = 400;
 const PHI_FINE: usize = 144;
 
-struct Case {
-    label: &'static str,
-    file: &'static str,
-    kernel: SeKernel,
-    ndf: Ndf,
-    ndf_label: &'static str,
-}
 
 /// Azimuth of `m` relative to the incident direction's azimuth, in (−π, π]. The incident
 /// direction `wi = −d` points toward −x, so φ_rel = 0 means "tilted toward the viewer".
@@ -95,22 +88,7 @@ fn tv(counts: &[f64], probs: &[f64], n: f64) -> Stats {
 pub fn run(ctx: &Ctx) -> Section {
     let angles: Vec<f64> = vec![0.0, 45.0, 70.0, 80.0];
     let (n, chunks) = if ctx.quick { (4_000, 2) } else { (100_000, 10) };
-    let cases = [
-        Case {
-            label: "height field (l_z = ∞)",
-            file: "height_field",
-            kernel: SeKernel::from_roughness(1.0, DVec3::new(1.0, 1.0, 0.0)).unwrap(),
-            ndf: Ndf::Beckmann(Beckmann::new(1.0, 1.0).unwrap()),
-            ndf_label: "Beckmann α = 1",
-        },
-        Case {
-            label: "isotropic (l_x = l_y = l_z)",
-            file: "isotropic",
-            kernel: SeKernel::from_roughness(1.0, DVec3::ONE).unwrap(),
-            ndf: Ndf::Gpss(Gpss::new(1.0, 1.0, 1.0).unwrap()),
-            ndf_label: "gpss α = α_z = 1",
-        },
-    ];
+    let cases = kernel_cases();
     // Jobs: one quadrature job per (case, angle), realization chunks, and (height field,
     // oblique incidence) brute-force track chunks.
     #[derive(Clone, Copy, PartialEq)]

@@ -9,6 +9,8 @@
 #include <thread>
 #include <vector>
 
+#include "embree_user_geometry.h"
+
 namespace mf {
 namespace {
 
@@ -190,23 +192,25 @@ double MacrofacetMedium::sigma_t_at(const Vec3& p, const Vec3& d, Vec3* n, Vec3*
     return st;
 }
 
-// Delta tracking (Woodcock) in segments [t, t + len] with the majorant of the lowest signed
-// distance the segment can reach: f >= f(t) - len (the SDF is 1-Lipschitz). The exponential
-// step is memoryless, so restarting it at each segment boundary with the next majorant is exact.
-bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, int, Sampler& sampler, MediumInteraction* mi,
-                                          Rgb* weight, Rgb* pdf_ratio) const {
-    *weight = Rgb(1.0f);
-    *pdf_ratio = Rgb(1.0f);
+// The segment march shared by delta and ratio tracking: segments [t, t + len] with the majorant
+// of the lowest signed distance the segment can reach: f >= f(t) - len (the SDF is 1-Lipschitz).
+// Space above the shell is skipped by the same bound. The exponential step is memoryless, so
+// restarting it at each segment boundary with the next majorant is exact. At every tentative
+// collision the real sigma_t is evaluated and `on_collision(t, p, st, mu, n, tangent, f)` decides
+// whether the march continues (true) or stops (false).
+template <class OnCollision>
+MacrofacetMedium::MarchEnd MacrofacetMedium::march(const Ray& ray, float t_max, Sampler& sampler,
+                                                   OnCollision&& on_collision) const {
     const double tm = t_max;
     double t = 0;
     for (int seg = 0; seg < kMaxSegments; ++seg) {
-        if (!(t < tm)) return false;
+        if (!(t < tm)) return MarchEnd::Left;
         Vec3 p0 = ray.at(float(t));
         if (grid_) {  // cheap conservative skip far above the shell
             float lo, hi;
             grid_->bounds(p0, &lo, &hi);
             if (lo > top_ + sigma_) {
-                if (!std::isfinite(tm)) return false;
+                if (!std::isfinite(tm)) return MarchEnd::Left;
                 t += lo - top_;
                 continue;
             }
@@ -214,7 +218,7 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, int, Samp
         double f0 = mean_->sdf(p0).f;
         if (f0 > top_ + sigma_) {
             // above the shell: no density until f comes back down to top (Lipschitz)
-            if (!std::isfinite(tm)) return false;
+            if (!std::isfinite(tm)) return MarchEnd::Left;
             t += f0 - top_;
             continue;
         }
@@ -235,70 +239,48 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, int, Samp
             float f;
             double st = sigma_t_at(p, ray.d, &n, &tan, &f);
             if (st > mu * (1.0 + 1e-9)) violations_.fetch_add(1, std::memory_order_relaxed);
-            if (double(sampler.next_1d()) * mu < st) {
-                mi->t = float(t);
-                mi->p = p;
-                mi->wo = -ray.d;
-                mi->frame_n = n;
-                mi->frame_t = tan;
-                mi->sdf_f = f;
-                mi->medium = this;
-                return true;
-            }
+            if (!on_collision(t, p, st, mu, n, tan, f)) return MarchEnd::Stopped;
         }
     }
-    *weight = Rgb(0.0f);
+    return MarchEnd::OutOfSegments;
+}
+
+// Delta tracking (Woodcock): a tentative collision is real with probability sigma_t / mu.
+bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, int, Sampler& sampler, MediumInteraction* mi,
+                                          Rgb* weight, Rgb* pdf_ratio) const {
+    *weight = Rgb(1.0f);
+    *pdf_ratio = Rgb(1.0f);
+    MarchEnd e = march(ray, t_max, sampler,
+                       [&](double t, const Vec3& p, double st, double mu, const Vec3& n, const Vec3& tan, float f) {
+                           if (!(double(sampler.next_1d()) * mu < st)) return true;
+                           mi->t = float(t);
+                           mi->p = p;
+                           mi->wo = -ray.d;
+                           mi->frame_n = n;
+                           mi->frame_t = tan;
+                           mi->sdf_f = f;
+                           mi->medium = this;
+                           return false;
+                       });
+    if (e == MarchEnd::Stopped) return true;
+    if (e == MarchEnd::OutOfSegments) *weight = Rgb(0.0f);
     return false;
 }
 
 // Ratio tracking with the same segments and majorants; Russian roulette once the estimate drops
 // below kRatioRoulette (unbiased; it stops walks deep into the opaque interior).
 Rgb MacrofacetMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
-    const double tm = t_max;
-    double T = 1.0, t = 0;
-    for (int seg = 0; seg < kMaxSegments; ++seg) {
-        if (!(t < tm)) return Rgb(float(T));
-        Vec3 p0 = ray.at(float(t));
-        if (grid_) {
-            float lo, hi;
-            grid_->bounds(p0, &lo, &hi);
-            if (lo > top_ + sigma_) {
-                if (!std::isfinite(tm)) return Rgb(float(T));
-                t += lo - top_;
-                continue;
-            }
-        }
-        double f0 = mean_->sdf(p0).f;
-        if (f0 > top_ + sigma_) {
-            if (!std::isfinite(tm)) return Rgb(float(T));
-            t += f0 - top_;
-            continue;
-        }
-        double len = std::min(segment_length(f0), tm - t);
-        double mu = majorant(f0 - len);
-        double end = t + len;
-        if (!(mu > 0)) {
-            t = end;
-            continue;
-        }
-        while (true) {
-            t += -std::log1p(-double(sampler.next_1d())) / mu;
-            if (!(t < end)) {
-                t = end;
-                break;
-            }
-            Vec3 n, tan;
-            float f;
-            double st = sigma_t_at(ray.at(float(t)), ray.d, &n, &tan, &f);
-            if (st > mu * (1.0 + 1e-9)) violations_.fetch_add(1, std::memory_order_relaxed);
-            T *= std::max(0.0, 1.0 - st / mu);
-            if (T < kRatioRoulette) {
-                if (!(double(sampler.next_1d()) * kRatioRoulette < T)) return Rgb(0.0f);
-                T = kRatioRoulette;
-            }
-        }
-    }
-    return Rgb(0.0f);
+    double T = 1.0;
+    MarchEnd e = march(ray, t_max, sampler,
+                       [&](double, const Vec3&, double st, double mu, const Vec3&, const Vec3&, float) {
+                           T *= std::max(0.0, 1.0 - st / mu);
+                           if (T < kRatioRoulette) {
+                               if (!(double(sampler.next_1d()) * kRatioRoulette < T)) return false;  // killed
+                               T = kRatioRoulette;
+                           }
+                           return true;
+                       });
+    return e == MarchEnd::Left ? Rgb(float(T)) : Rgb(0.0f);
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -541,64 +523,18 @@ bool LevelSetShape::intersect(const Vec3& o, const Vec3& d, float tnear, float t
 
 namespace {
 
-void levelset_bounds(const RTCBoundsFunctionArguments* args) {
-    const LevelSetShape* s = static_cast<const LevelSetShape*>(args->geometryUserPtr);
-    Aabb b = s->bounds();
-    args->bounds_o->lower_x = b.lo.x; args->bounds_o->lower_y = b.lo.y; args->bounds_o->lower_z = b.lo.z;
-    args->bounds_o->upper_x = b.hi.x; args->bounds_o->upper_y = b.hi.y; args->bounds_o->upper_z = b.hi.z;
-}
-
-void levelset_intersect(const RTCIntersectFunctionNArguments* args) {
-    const LevelSetShape* s = static_cast<const LevelSetShape*>(args->geometryUserPtr);
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (!args->valid[i]) continue;
-        RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
-        RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
-        Vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
-        Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
-        float t;
-        bool exiting;
-        if (!s->intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t, &exiting)) continue;
-        RTCRayN_tfar(ray, args->N, i) = t;
-        Vec3 n = exiting ? d : -d;  // placeholder; fill_hit computes the real normal
-        RTCHitN_Ng_x(hit, args->N, i) = n.x;
-        RTCHitN_Ng_y(hit, args->N, i) = n.y;
-        RTCHitN_Ng_z(hit, args->N, i) = n.z;
-        RTCHitN_u(hit, args->N, i) = exiting ? 1.0f : 0.0f;  // crossing direction for fill_hit
-        RTCHitN_v(hit, args->N, i) = 0.0f;
-        RTCHitN_primID(hit, args->N, i) = args->primID;
-        RTCHitN_geomID(hit, args->N, i) = args->geomID;
-        RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
-    }
-}
-
-void levelset_occluded(const RTCOccludedFunctionNArguments* args) {
-    const LevelSetShape* s = static_cast<const LevelSetShape*>(args->geometryUserPtr);
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (!args->valid[i]) continue;
-        RTCRayN* ray = args->ray;
-        Vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
-        Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
-        float t;
-        bool exiting;
-        if (s->intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t, &exiting))
-            RTCRayN_tfar(ray, args->N, i) = -kInf;
-    }
+bool levelset_hit(const LevelSetShape& s, const Vec3& o, const Vec3& d, float tnear, float tfar, UserGeometryHit* h) {
+    bool exiting;
+    if (!s.intersect(o, d, tnear, tfar, &h->t, &exiting)) return false;
+    h->ng = exiting ? d : -d;       // placeholder; fill_hit computes the real normal
+    h->u = exiting ? 1.0f : 0.0f;  // crossing direction for fill_hit
+    return true;
 }
 
 }  // namespace
 
 unsigned LevelSetShape::attach(RTCDevice device, RTCScene scene) const {
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
-    rtcSetGeometryUserPrimitiveCount(g, 1);
-    rtcSetGeometryUserData(g, const_cast<LevelSetShape*>(this));
-    rtcSetGeometryBoundsFunction(g, levelset_bounds, nullptr);
-    rtcSetGeometryIntersectFunction(g, levelset_intersect);
-    rtcSetGeometryOccludedFunction(g, levelset_occluded);
-    rtcCommitGeometry(g);
-    unsigned id = rtcAttachGeometry(scene, g);
-    rtcReleaseGeometry(g);
-    return id;
+    return UserGeometry<LevelSetShape, levelset_hit>::attach(device, scene, this);
 }
 
 void LevelSetShape::fill_hit(const Ray& ray, float t, unsigned prim, float u, float, SurfaceHit* hit) const {

@@ -75,6 +75,12 @@ public:
 private:
     /// Length of the next tracking segment starting at signed distance f0.
     double segment_length(double f0) const;
+    /// How march() ended: the ray left [0, t_max] (or escaped above the shell towards infinity),
+    /// the collision callback stopped it, or it ran out of segments.
+    enum class MarchEnd { Left, Stopped, OutOfSegments };
+    /// The segment march of both tracking estimators (defined in medium_macrofacet.cpp).
+    template <class OnCollision>
+    MarchEnd march(const Ray& ray, float t_max, Sampler& sampler, OnCollision&& on_collision) const;
 
     mf_medium* handle_;
     std::shared_ptr<const Shape> mean_;

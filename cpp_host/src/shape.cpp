@@ -1,6 +1,8 @@
 // mfhost — shapes (see shape.h).
 #include "shape.h"
 
+#include "embree_user_geometry.h"
+
 namespace mf {
 
 // ----------------------------------------------------------------------------------------------
@@ -149,62 +151,17 @@ bool SphereShape::intersect(const Vec3& o, const Vec3& d, float tnear, float tfa
 
 namespace {
 
-void sphere_bounds(const RTCBoundsFunctionArguments* args) {
-    const SphereShape* s = static_cast<const SphereShape*>(args->geometryUserPtr);
-    Aabb b = s->bounds();
-    args->bounds_o->lower_x = b.lo.x; args->bounds_o->lower_y = b.lo.y; args->bounds_o->lower_z = b.lo.z;
-    args->bounds_o->upper_x = b.hi.x; args->bounds_o->upper_y = b.hi.y; args->bounds_o->upper_z = b.hi.z;
-}
-
-void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
-    const SphereShape* s = static_cast<const SphereShape*>(args->geometryUserPtr);
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (!args->valid[i]) continue;
-        RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
-        RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
-        Vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
-        Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
-        float t;
-        if (!s->intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t)) continue;
-        Vec3 n = o + d * t - s->center();
-        RTCRayN_tfar(ray, args->N, i) = t;
-        RTCHitN_Ng_x(hit, args->N, i) = n.x;
-        RTCHitN_Ng_y(hit, args->N, i) = n.y;
-        RTCHitN_Ng_z(hit, args->N, i) = n.z;
-        RTCHitN_u(hit, args->N, i) = 0.0f;
-        RTCHitN_v(hit, args->N, i) = 0.0f;
-        RTCHitN_primID(hit, args->N, i) = args->primID;
-        RTCHitN_geomID(hit, args->N, i) = args->geomID;
-        RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
-    }
-}
-
-void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
-    const SphereShape* s = static_cast<const SphereShape*>(args->geometryUserPtr);
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (!args->valid[i]) continue;
-        RTCRayN* ray = args->ray;
-        Vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
-        Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
-        float t;
-        if (s->intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t))
-            RTCRayN_tfar(ray, args->N, i) = -kInf;
-    }
+bool sphere_hit(const SphereShape& s, const Vec3& o, const Vec3& d, float tnear, float tfar, UserGeometryHit* h) {
+    if (!s.intersect(o, d, tnear, tfar, &h->t)) return false;
+    h->ng = o + d * h->t - s.center();
+    h->u = 0.0f;
+    return true;
 }
 
 }  // namespace
 
 unsigned SphereShape::attach(RTCDevice device, RTCScene scene) const {
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
-    rtcSetGeometryUserPrimitiveCount(g, 1);
-    rtcSetGeometryUserData(g, const_cast<SphereShape*>(this));
-    rtcSetGeometryBoundsFunction(g, sphere_bounds, nullptr);
-    rtcSetGeometryIntersectFunction(g, sphere_intersect);
-    rtcSetGeometryOccludedFunction(g, sphere_occluded);
-    rtcCommitGeometry(g);
-    unsigned id = rtcAttachGeometry(scene, g);
-    rtcReleaseGeometry(g);
-    return id;
+    return UserGeometry<SphereShape, sphere_hit>::attach(device, scene, this);
 }
 
 void SphereShape::fill_hit(const Ray& ray, float t, unsigned prim, float, float, SurfaceHit* hit) const {

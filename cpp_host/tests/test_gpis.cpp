@@ -14,82 +14,18 @@
 //    (grazing the mean surface) sometimes (0 < mean T < 1, N = 2000).
 //  * determinism_gpis: a floor, an area light, a gold gpis sphere: bit-identical EXR for the same
 //    seed with 1 and 2 threads; a different seed gives a different image.
-#include <sys/stat.h>
-
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include "check.h"
-#include "cli.h"
-#include "image_io.h"
 #include "integrator.h"
 #include "medium_gpis.h"
 #include "scene_builder.h"
+#include "scene_util.h"
 
 using namespace mf;
 
-static std::string work(const std::string& name) { return std::string(MFHOST_TEST_WORK) + "/" + name; }
-
-static void write_file(const std::string& path, const std::string& content) {
-    std::ofstream f(path, std::ios::binary);
-    f << content;
-}
-
-static std::string read_file(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-static int run(std::vector<std::string> args) {
-    args.insert(args.begin(), "mfrender");
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    return mfrender_main(int(argv.size()), argv.data());
-}
-
-static std::string camera(float z, float fov, int w, int h, int spp) {
-    std::ostringstream s;
-    s << "<sensor type=\"perspective\"><float name=\"fov\" value=\"" << fov << "\"/>"
-      << "<transform name=\"to_world\"><lookat origin=\"0, 0, " << z << "\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform>"
-      << "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" << w << "\"/><integer name=\"height\" value=\"" << h
-      << "\"/><rfilter type=\"box\"/></film>"
-      << "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" << spp << "\"/></sampler></sensor>";
-    return s.str();
-}
-
-struct Stats {
-    double mean[3] = {0, 0, 0}, se[3] = {0, 0, 0}, maxdev = 0;
-};
-
-static Stats stats(const Image& img, double expected) {
-    Stats s;
-    size_t n = size_t(img.width) * img.height;
-    for (int c = 0; c < 3; ++c) {
-        double sum = 0, sum2 = 0;
-        for (size_t i = 0; i < n; ++i) {
-            double v = img.rgb[3 * i + c];
-            sum += v;
-            sum2 += v * v;
-            s.maxdev = std::max(s.maxdev, std::fabs(v - expected));
-        }
-        s.mean[c] = sum / n;
-        s.se[c] = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)) / n);
-    }
-    return s;
-}
-
 static std::string env_scene(const std::string& object, int spp, int w = 24) {
-    return "<scene version=\"3.0.0\"><integrator type=\"volpath\"><integer name=\"rr_depth\" value=\"1\"/></integrator>" +
-           camera(3.0f, 30.0f, w, w, spp) + object + "<emitter type=\"constant\"><rgb name=\"radiance\" value=\"1\"/></emitter></scene>";
-}
-
-static Image render(const std::string& name, const std::string& xml, const std::string& seed = "5") {
-    write_file(work(name + ".xml"), xml);
-    CHECK(run({work(name + ".xml"), "-o", work(name + ".exr"), "--quiet", "--seed", seed}) == 0);
-    return read_exr(work(name + ".exr"));
+    return furnace_scene(object, spp, 1, 30.0f, w);
 }
 
 static std::string gpis_object(const std::string& type, const std::string& params, const std::string& material,
@@ -100,15 +36,7 @@ static std::string gpis_object(const std::string& type, const std::string& param
 
 static void furnace(const std::string& name, const std::string& params, const std::string& shape) {
     Image img = render("gpis_furnace_" + name, env_scene(gpis_object("gpis", params, "none", shape), 16));
-    Stats s = stats(img, 1.0);
-    double sd = 0;
-    for (int c = 0; c < 3; ++c) {
-        double tol = 4.5 * s.se[c] + 1e-3;
-        CHECK_MSG(std::fabs(s.mean[c] - 1.0) < tol, name + ": channel " + std::to_string(c) + " mean " +
-                                                    std::to_string(s.mean[c]) + " (tol " + std::to_string(tol) + ")");
-        sd = std::max(sd, s.se[c] * std::sqrt(double(img.width) * img.height));
-    }
-    CHECK_MSG(s.maxdev < 10 * sd + 1e-3, name + ": max pixel deviation " + std::to_string(s.maxdev) + " vs sd " + std::to_string(sd));
+    Stats s = check_furnace(name, img, 1.0, 1e-3);
     Image au = render("gpis_furnace_au_" + name, env_scene(gpis_object("gpis", params, "Au", shape), 4));
     Stats sa = stats(au, 1.0);
     CHECK_MSG(sa.mean[2] < 0.9, name + ": a gold gpis is not visible (blue mean " + std::to_string(sa.mean[2]) + ")");

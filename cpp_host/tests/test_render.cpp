@@ -8,97 +8,20 @@
 //    grey medium each sample is a Bernoulli(T) outcome, SE = sqrt(T(1−T)/(spp·pixels))).
 //    The shadow-ray transmittance through the same slab is analytic: checked to 1e-5 relative.
 //  * Determinism: same seed → bit-identical EXR files, with 1 and 2 threads alike.
-#include <sys/stat.h>
 #include <unistd.h>
 
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include "check.h"
-#include "cli.h"
-#include "image_io.h"
 #include "integrator.h"
 #include "scene_builder.h"
+#include "scene_util.h"
 
 using namespace mf;
 
-static std::string work(const std::string& name) { return std::string(MFHOST_TEST_WORK) + "/" + name; }
-
-static void write_file(const std::string& path, const std::string& content) {
-    std::ofstream f(path, std::ios::binary);
-    f << content;
-}
-
-static std::string read_file(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-static bool exists(const std::string& p) {
-    struct stat st;
-    return ::stat(p.c_str(), &st) == 0;
-}
-
-static int run(std::vector<std::string> args) {
-    args.insert(args.begin(), "mfrender");
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    return mfrender_main(int(argv.size()), argv.data());
-}
-
-static std::string camera(float z, float fov, int w, int h, int spp) {
-    std::ostringstream s;
-    s << "<sensor type=\"perspective\"><float name=\"fov\" value=\"" << fov << "\"/>"
-      << "<transform name=\"to_world\"><lookat origin=\"0, 0, " << z << "\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform>"
-      << "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" << w << "\"/><integer name=\"height\" value=\"" << h
-      << "\"/><rfilter type=\"box\"/></film>"
-      << "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" << spp << "\"/></sampler></sensor>";
-    return s.str();
-}
-
-struct Stats {
-    double mean[3] = {0, 0, 0}, se[3] = {0, 0, 0}, maxdev = 0;
-};
-
-static Stats stats(const Image& img, double expected) {
-    Stats s;
-    size_t n = size_t(img.width) * img.height;
-    for (int c = 0; c < 3; ++c) {
-        double sum = 0, sum2 = 0;
-        for (size_t i = 0; i < n; ++i) {
-            double v = img.rgb[3 * i + c];
-            sum += v;
-            sum2 += v * v;
-            s.maxdev = std::max(s.maxdev, std::fabs(v - expected));
-        }
-        s.mean[c] = sum / n;
-        double var = std::max(0.0, (sum2 - sum * sum / n) / (n - 1));
-        s.se[c] = std::sqrt(var / n);
-    }
-    return s;
-}
-
 static void furnace(const std::string& name, const std::string& object, int spp, double expected = 1.0) {
-    const std::string scene = work(name + ".xml"), out = work(name + ".exr");
-    write_file(scene, "<scene version=\"3.0.0\"><integrator type=\"volpath\"><integer name=\"rr_depth\" value=\"3\"/></integrator>" +
-                          camera(3.0f, 36.0f, 24, 24, spp) + object +
-                          "<emitter type=\"constant\"><rgb name=\"radiance\" value=\"1\"/></emitter></scene>");
-    CHECK(run({scene, "-o", out, "--quiet", "--seed", "5"}) == 0);
-    Image img = read_exr(out);
-    Stats s = stats(img, expected);
-    for (int c = 0; c < 3; ++c) {
-        double tol = 4.5 * s.se[c] + 1e-4;
-        CHECK_MSG(std::fabs(s.mean[c] - expected) < tol, name + ": channel " + std::to_string(c) + " mean " +
-                                                      std::to_string(s.mean[c]) + " (tol " + std::to_string(tol) + ")");
-    }
-    // No fireflies: every pixel within 10 per-pixel standard deviations (sd = se·sqrt(pixels))
-    // of the expectation — catches unbounded weights, which leave the mean test weak.
-    double sd = 0;
-    for (int c = 0; c < 3; ++c) sd = std::max(sd, s.se[c] * std::sqrt(double(img.width) * img.height));
-    CHECK_MSG(s.maxdev < 10 * sd + 1e-3, name + ": max pixel deviation " + std::to_string(s.maxdev) + " vs sd " + std::to_string(sd));
+    Image img = render(name, furnace_scene(object, spp, 3, 36.0f));
+    Stats s = check_furnace(name, img, expected, 1e-4);
     std::printf("  %s: mean %.5f %.5f %.5f, se %.5f, max |dev| %.3f\n", name.c_str(), s.mean[0], s.mean[1], s.mean[2],
                 s.se[0], s.maxdev);
 }

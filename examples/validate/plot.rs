@@ -123,50 +123,42 @@ impl Canvas {
         }
     }
 
-    /// Text in the 5×7 font, `scale` screen pixels per font pixel; `(x, y)` is the top-left
-    /// corner. Returns the width drawn.
-    pub fn text(&mut self, x: f64, y: f64, s: &str, scale: usize, color: Color) -> f64 {
-        let mut cx = x.round() as i64;
-        let y = y.round() as i64;
-        for ch in s.chars() {
+    /// Stamps the glyphs of `s` (5×7 font, `scale` screen pixels per font pixel); `place(k, c, r)`
+    /// maps font pixel `(c, r)` of the `k`-th character to screen coordinates.
+    fn glyphs(&mut self, s: &str, scale: usize, color: Color, place: impl Fn(i64, i64, i64) -> (i64, i64)) {
+        for (k, ch) in s.chars().enumerate() {
             let rows = glyph(ch).unwrap_or(["#####", "#...#", "#...#", "#...#", "#...#", "#...#", "#####"]);
             for (r, row) in rows.iter().enumerate() {
                 for (c, b) in row.bytes().enumerate() {
                     if b == b'#' {
                         for dy in 0..scale {
                             for dx in 0..scale {
-                                self.blend(cx + (c * scale + dx) as i64, y + (r * scale + dy) as i64, color, 1.0);
+                                let (px, py) = place(k as i64, (c * scale + dx) as i64, (r * scale + dy) as i64);
+                                self.blend(px, py, color, 1.0);
                             }
                         }
                     }
                 }
             }
-            cx += ((GLYPH_W + 1) * scale) as i64;
         }
+    }
+
+    /// Text in the 5×7 font, `scale` screen pixels per font pixel; `(x, y)` is the top-left
+    /// corner. Returns the width drawn.
+    pub fn text(&mut self, x: f64, y: f64, s: &str, scale: usize, color: Color) -> f64 {
+        let (x, y) = (x.round() as i64, y.round() as i64);
+        let advance = ((GLYPH_W + 1) * scale) as i64;
+        self.glyphs(s, scale, color, |k, c, r| (x + k * advance + c, y + r));
         text_width(s, scale)
     }
 
     /// Text rotated by 90° counter-clockwise (for y-axis labels); `(x, y)` is the bottom-left
     /// corner of the rotated string.
     pub fn text_vertical(&mut self, x: f64, y: f64, s: &str, scale: usize, color: Color) {
-        let x = x.round() as i64;
-        let mut cy = y.round() as i64;
-        for ch in s.chars() {
-            let rows = glyph(ch).unwrap_or(["#####", "#...#", "#...#", "#...#", "#...#", "#...#", "#####"]);
-            for (r, row) in rows.iter().enumerate() {
-                for (c, b) in row.bytes().enumerate() {
-                    if b == b'#' {
-                        for dy in 0..scale {
-                            for dx in 0..scale {
-                                // Glyph (c, r) -> screen (x + r, y - c).
-                                self.blend(x + (r * scale + dx) as i64, cy - (c * scale + dy) as i64, color, 1.0);
-                            }
-                        }
-                    }
-                }
-            }
-            cy -= ((GLYPH_W + 1) * scale) as i64;
-        }
+        let (x, y) = (x.round() as i64, y.round() as i64);
+        let advance = ((GLYPH_W + 1) * scale) as i64;
+        // Glyph pixel (c, r) -> screen (x + r, y - c).
+        self.glyphs(s, scale, color, |k, c, r| (x + r, y - k * advance - c));
     }
 
     pub fn save_png(&self, path: &Path) -> std::io::Result<()> {

@@ -9,32 +9,35 @@ use glam::DVec3;
 use macrofacet::stats::Pcg32;
 use std::f64::consts::{PI, SQRT_2};
 
+/// `(P_n(x), P_{n-1}(x))` by the three-term Legendre recurrence.
+fn legendre(n: usize, x: f64) -> (f64, f64) {
+    let (mut p0, mut p1) = (1.0, x);
+    for k in 2..=n {
+        let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
+        p0 = p1;
+        p1 = p2;
+    }
+    (p1, p0)
+}
+
 /// Gauss–Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
 pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    let derivative = |x: f64| {
+        let (p1, p0) = legendre(n, x);
+        (p1, n as f64 * (x * p1 - p0) / (x * x - 1.0))
+    };
     (0..n)
         .map(|i| {
             let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
             for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                let dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
+                let (p, dp) = derivative(x);
+                let dx = p / dp;
                 x -= dx;
                 if dx.abs() < 1e-15 {
                     break;
                 }
             }
-            let (mut p0, mut p1) = (1.0, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            let dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+            let dp = derivative(x).1;
             (x, 2.0 / ((1.0 - x * x) * dp * dp))
         })
         .collect()

@@ -12,7 +12,7 @@
 //! a host must march through.
 
 use crate::error::{check_positive, Result};
-use crate::special::{ln_normal_cdf, normal_pdf_over_cdf};
+use crate::special::{ln_normal_cdf, normal_pdf_over_cdf, probit_of_ln};
 
 /// Default `k` of the `+kσ` top face (seeds/000 Sec. 4 uses 3σ).
 pub const DEFAULT_SHELL_EXTENT: f64 = 3.0;
@@ -50,5 +50,98 @@ impl HeightProfile {
     /// `ln Φ(min(f, kσ)/σ)`: an antiderivative of [`Self::density`] in `f`.
     pub fn ln_cdf(&self, f: f64) -> f64 {
         ln_normal_cdf(f.min(self.top()) / self.sigma)
+    }
+}
+
+/// Below this `|Δf|/σ` the integral of the density along a segment uses 3-point Gauss–Legendre
+/// instead of differencing logarithms (which would lose `ε |ln Φ| / (|Δf|/σ)`); the rule's error
+/// there is `O((Δf/σ)^6)`, far below 1e-15.
+const SMALL_DELTA: f64 = 1e-3;
+
+impl HeightProfile {
+    /// `∫_0^t ρ(f0 + k u) du` along a segment on which the signed distance is linear with slope
+    /// `k` (scene units per unit length; `k = d·n` for a planar shell), `t` may be `+∞`. Since
+    /// `d/df ln Φ(f/σ) = ρ(f)`, the integral is `[ln Φ(f1/σ) − ln Φ(f0/σ)] / k` over the part of the
+    /// segment below the top face (seeds/000 Eq. 13; the closed form of the design notes).
+    pub fn density_integral(&self, f0: f64, slope: f64, t: f64) -> f64 {
+        if !(t > 0.0) {
+            return 0.0;
+        }
+        let top = self.top();
+        if slope == 0.0 {
+            // Parallel to the mean surface: constant density (zero above the top face).
+            let rho = self.density(f0);
+            return if rho == 0.0 { 0.0 } else { t * rho };
+        }
+        // The end value without forming ∞·0 for an infinite segment.
+        let f1 = if t == f64::INFINITY { slope.signum() * f64::INFINITY } else { f0 + slope * t };
+        let (above0, above1) = (f0 > top, f1 > top);
+        if above0 && above1 {
+            return 0.0; // the whole segment lies above the shell
+        }
+        if f1 == f64::NEG_INFINITY {
+            return f64::INFINITY; // ρ grows like |f|/σ² below: unbounded optical depth
+        }
+        let (fa, fb) = (f0.min(top), f1.min(top));
+        if (fb - fa).abs() <= SMALL_DELTA * self.sigma {
+            // Nearly parallel: the length below the top face times the mean density there.
+            let inside = if above0 || above1 { ((fb - fa) / slope).abs().min(t) } else { t };
+            let (mid, half) = (0.5 * (fa + fb), 0.5 * (fb - fa));
+            let node = half * (0.6f64).sqrt();
+            let mean = (5.0 * self.density(mid - node) + 8.0 * self.density(mid) + 5.0 * self.density(mid + node)) / 18.0;
+            return inside * mean;
+        }
+        // Both factors change sign together; rounding may leave a tiny negative value.
+        ((self.ln_cdf(fb) - self.ln_cdf(fa)) / slope).max(0.0)
+    }
+
+    /// The smallest `t ∈ [0, t_max]` with `density_integral(f0, slope, t) = target`, or `None`
+    /// when the integral over `[0, t_max]` stays below `target` (`target >= 0`). Inverts `Φ`
+    /// analytically (`ln Φ(f/σ) = ln Φ(f_s/σ) + k · target`), then polishes with Newton steps
+    /// safeguarded by a bracket, which keeps nearly parallel segments accurate.
+    pub fn invert_density_integral(&self, f0: f64, slope: f64, t_max: f64, target: f64) -> Option<f64> {
+        if !(t_max > 0.0) || !(target < self.density_integral(f0, slope, t_max)) {
+            return None;
+        }
+        let top = self.top();
+        // Where the segment enters the shell (only a descending segment can start above it).
+        let t_start = if f0 > top { (f0 - top) / -slope } else { 0.0 };
+        let f_start = f0.min(top);
+        let guess = if slope == 0.0 {
+            target / self.density(f0)
+        } else {
+            let f = self.sigma * probit_of_ln(self.ln_cdf(f_start) + slope * target);
+            t_start + (f - f_start) / slope
+        };
+        let (mut lo, mut hi) = (t_start, t_max);
+        let mut t = if guess.is_finite() { guess.clamp(lo, hi) } else { lo };
+        for _ in 0..100 {
+            let r = self.density_integral(f0, slope, t) - target;
+            if r == 0.0 {
+                break;
+            }
+            if r < 0.0 {
+                lo = t;
+            } else {
+                hi = t;
+            }
+            let rate = self.density(f0 + t * slope);
+            let newton = t - r / rate;
+            if rate > 0.0 && (newton - t).abs() <= 1e-14 * t.abs().max(f64::MIN_POSITIVE) {
+                t = newton.clamp(lo, hi);
+                break;
+            }
+            t = if rate > 0.0 && newton > lo && newton < hi {
+                newton
+            } else if hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                2.0 * t.max(lo) + self.sigma // unbounded above: expand
+            };
+            if hi - lo <= 1e-15 * hi.abs() {
+                break;
+            }
+        }
+        Some(t)
     }
 }

@@ -32,9 +32,12 @@ pub mod medium;
 pub mod ndf;
 pub mod params;
 pub mod phase;
+pub mod rng;
 pub mod slab;
 pub mod special;
 pub mod stats;
+pub mod surface;
+pub mod tracking;
 
 /// Linear RGB, one value per channel.
 pub type Rgb = [f64; 3];

@@ -103,3 +103,53 @@ impl MicrofacetDistribution for Ndf {
 pub fn alpha_from_kernel(sigma: f64, lengthscale: f64) -> f64 {
     std::f64::consts::SQRT_2 * sigma / lengthscale
 }
+
+impl Ndf {
+    /// Isotropic distributions with the largest and the smallest tangential roughness of this
+    /// one (same `alpha_z`). The projected area seen from `w` grows with the roughness along
+    /// `w` — for Gaussian gradients `E[max(0, w_z + s Z/√2)]` grows with `s = |α ∘ w|`
+    /// (seeds/000 Eq. 32), for GGX `(w_z + sqrt(t² + w_z²))/2` grows with `t²` — so the two
+    /// bound the projected area for every azimuth of `w`, whatever the tangent.
+    pub fn isotropic_envelope(&self) -> (Ndf, Ndf) {
+        match *self {
+            Ndf::Beckmann(b) => {
+                let (hi, lo) = (b.alpha_u.max(b.alpha_v), b.alpha_u.min(b.alpha_v));
+                (Ndf::Beckmann(Beckmann { alpha_u: hi, alpha_v: hi }), Ndf::Beckmann(Beckmann { alpha_u: lo, alpha_v: lo }))
+            }
+            Ndf::Ggx(g) => {
+                let (hi, lo) = (g.alpha_u.max(g.alpha_v), g.alpha_u.min(g.alpha_v));
+                (Ndf::Ggx(Ggx { alpha_u: hi, alpha_v: hi }), Ndf::Ggx(Ggx { alpha_u: lo, alpha_v: lo }))
+            }
+            Ndf::Gpss(g) => {
+                let (hi, lo) = (g.alpha_x.max(g.alpha_y), g.alpha_x.min(g.alpha_y));
+                (
+                    Ndf::Gpss(Gpss { alpha_x: hi, alpha_y: hi, alpha_z: g.alpha_z }),
+                    Ndf::Gpss(Gpss { alpha_x: lo, alpha_y: lo, alpha_z: g.alpha_z }),
+                )
+            }
+        }
+    }
+
+    /// A bound of `|d/dθ projected_area(w(θ))|` for `w` moving along any great circle.
+    /// Gaussian gradients: `|∇_w E[max(0, w·g)]| <= E|g| <= sqrt(E|g|²) = sqrt(1 + Σα²/2)`.
+    /// GGX: the derivative of `(cos θ + sqrt(α² sin² θ + cos² θ))/2` is at most `(1 + max(1, α))/2`
+    /// in magnitude (the root's derivative is `(α² − 1) sin θ cos θ / root`, and the root is at
+    /// least `|cos θ|` and `α |sin θ|`); anisotropy is covered by the largest `α`.
+    pub fn projected_area_lipschitz(&self) -> f64 {
+        let gaussian = |a: DVec3| (1.0 + 0.5 * a.length_squared()).sqrt();
+        match *self {
+            Ndf::Beckmann(b) => gaussian(DVec3::new(b.alpha_u, b.alpha_v, 0.0)),
+            Ndf::Ggx(g) => 0.5 * (1.0 + g.alpha_u.max(g.alpha_v).max(1.0)),
+            Ndf::Gpss(g) => gaussian(DVec3::new(g.alpha_x, g.alpha_y, g.alpha_z)),
+        }
+    }
+
+    /// True when the distribution has no preferred tangential direction.
+    pub fn is_isotropic(&self) -> bool {
+        match *self {
+            Ndf::Beckmann(b) => b.alpha_u == b.alpha_v,
+            Ndf::Ggx(g) => g.alpha_u == g.alpha_v,
+            Ndf::Gpss(g) => g.alpha_x == g.alpha_y,
+        }
+    }
+}

@@ -11,6 +11,8 @@ pub mod reference;
 
 pub use reference::gauss_legendre;
 
+pub mod meshes;
+
 /// `∫_{S²} f(ω) dω` with Gauss–Legendre panels in θ graded toward both poles (where peaked NDFs
 /// concentrate) and in φ. `panels` per hemisphere in θ, `n_phi` panels in φ, 8 nodes each.
 pub fn sphere_integral(f: impl Fn(DVec3) -> f64, panels: usize, n_phi: usize) -> f64 {

@@ -1,0 +1,174 @@
+//! Mean surfaces: the signed-distance field `f` whose zero set is the mean of a Gaussian-process
+//! statistical surface (seeds/000 Sec. 3), with the local frame of its flakes.
+//!
+//! The tracker ([`crate::tracking`]) asks a surface two things:
+//! - [`MeanSurface::point`]: `f(p)`, the unit frame normal `n(p)` (the gradient of `f`, or a
+//!   smooth shading normal for meshes with vertex normals) and the tangent that carries
+//!   `alpha_u` (Mitsuba's `dp/du`; any vector for isotropic roughness);
+//! - [`MeanSurface::bound`]: conservative bounds of `f` and of `d·n` along a segment
+//!   ([`SegmentBound`]), from which the tracker builds a majorant that is exact for a planar
+//!   shell and still bounds `σ_t` on a curved one. Every surface can answer with the Lipschitz
+//!   bound of a signed-distance function ([`SegmentBound::lipschitz`]); tighter answers make
+//!   tracking cheaper, never biased.
+//!
+//! SDF sign (design notes): `f > 0` outside, `f < 0` inside. Every `f` here is 1-Lipschitz.
+
+mod convex;
+mod mesh;
+mod sphere;
+
+pub use convex::{convex_bound, Curvature};
+pub use mesh::TriangleMesh;
+pub use sphere::Sphere;
+
+use crate::error::{Error, ErrorKind, Result};
+use glam::DVec3;
+
+/// What a mean surface knows at one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    /// Signed distance to the mean surface (scene units).
+    pub f: f64,
+    /// Unit normal of the local frame (local `+z`).
+    pub normal: DVec3,
+    /// Direction of `alpha_u`; made orthogonal to `normal` by the frame (any vector, even zero,
+    /// for isotropic roughness).
+    pub tangent: DVec3,
+}
+
+/// Conservative bounds along the segment `p + s d`, `s ∈ [0, length]`:
+/// `f_lo(s) <= f(p + s d) <= f_hi(s)` with `f_lo`, `f_hi` linear between their values at the two
+/// ends, and `cos[0] <= d · n(p + s d) <= cos[1]` for the frame normal `n`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentBound {
+    /// The length the bound holds for: at most the length asked for (a surface may shorten it).
+    pub length: f64,
+    /// Lower bound of `f` at `s = 0` and `s = length` (`-∞` allowed: no bound).
+    pub f_lo: [f64; 2],
+    /// Upper bound of `f` at `s = 0` and `s = length` (`+∞` allowed: no bound).
+    pub f_hi: [f64; 2],
+    /// Range of `d · n` along the segment, within `[-1, 1]`.
+    pub cos: [f64; 2],
+    /// The surface point at `s = length`, when computing the bound produced it exactly (saves the
+    /// tracker a query at the start of the next segment).
+    pub end: Option<SurfacePoint>,
+}
+
+impl SegmentBound {
+    /// The bound every signed-distance function admits: `|f(p + s d) − f(p)| <= s`, any frame.
+    pub fn lipschitz(f0: f64, length: f64) -> SegmentBound {
+        SegmentBound {
+            length,
+            f_lo: [f0, f0 - length],
+            f_hi: [f0, f0 + length],
+            cos: [-1.0, 1.0],
+            end: None,
+        }
+    }
+
+    /// `f_lo(s)` as `(value at 0, slope)`.
+    pub fn lower_line(&self) -> (f64, f64) {
+        line(self.f_lo, self.length)
+    }
+
+    /// `f_hi(s)` as `(value at 0, slope)`; the value is `+∞` without an upper bound.
+    pub fn upper_line(&self) -> (f64, f64) {
+        line(self.f_hi, self.length)
+    }
+
+    /// Checks what a surface returned: finite lengths, ordered lines, a cosine range in
+    /// `[-1, 1]`, and consistency with the known value `f0` at the start. `what` names the
+    /// surface in the message.
+    pub fn validate(&self, asked: f64, f0: f64, what: &str) -> Result<()> {
+        let bad = |m: String| Err(Error::new(ErrorKind::InvalidArgument, format!("{what}: segment bound {m}")));
+        if !(self.length > 0.0 && self.length <= asked) {
+            return bad(format!("length must lie in (0, {asked}], got {}", self.length));
+        }
+        if self.f_lo.iter().any(|v| v.is_nan() || *v == f64::INFINITY)
+            || self.f_hi.iter().any(|v| v.is_nan() || *v == f64::NEG_INFINITY)
+        {
+            return bad(format!("f_lo must be < +inf and f_hi > -inf, not NaN; got f_lo {:?}, f_hi {:?}", self.f_lo, self.f_hi));
+        }
+        // 1e-9 relative slack: hosts compute the bound and the point in different roundings.
+        let slack = 1e-9 * (1.0 + f0.abs());
+        if self.f_lo[0] > f0 + slack || self.f_hi[0] < f0 - slack {
+            return bad(format!("[{}, {}] at the start does not contain f = {f0}", self.f_lo[0], self.f_hi[0]));
+        }
+        if !(self.cos[0] >= -1.0 - 1e-9 && self.cos[1] <= 1.0 + 1e-9 && self.cos[0] <= self.cos[1]) {
+            return bad(format!("cos range must be an ordered range within [-1, 1], got {:?}", self.cos));
+        }
+        Ok(())
+    }
+}
+
+fn line(ends: [f64; 2], length: f64) -> (f64, f64) {
+    if ends[0].is_infinite() || ends[1].is_infinite() {
+        return (ends[0], 0.0);
+    }
+    (ends[0], (ends[1] - ends[0]) / length)
+}
+
+/// An axis-aligned box; infinite coordinates for unbounded surfaces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    pub const EVERYTHING: Aabb = Aabb { min: DVec3::NEG_INFINITY, max: DVec3::INFINITY };
+
+    pub fn grown(&self, by: f64) -> Aabb {
+        Aabb { min: self.min - DVec3::splat(by), max: self.max + DVec3::splat(by) }
+    }
+
+    /// The parameter interval of `o + t d` inside the box, clipped to `[t0, t1]`; `None` when
+    /// the ray misses it.
+    pub fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (t0, t1);
+        for a in 0..3 {
+            let (bmin, bmax) = (self.min[a], self.max[a]);
+            if bmin == f64::NEG_INFINITY && bmax == f64::INFINITY {
+                continue;
+            }
+            if d[a] == 0.0 {
+                if o[a] < bmin || o[a] > bmax {
+                    return None;
+                }
+                continue;
+            }
+            let inv = 1.0 / d[a];
+            let (mut ta, mut tb) = ((bmin - o[a]) * inv, (bmax - o[a]) * inv);
+            if ta > tb {
+                std::mem::swap(&mut ta, &mut tb);
+            }
+            lo = lo.max(ta);
+            hi = hi.min(tb);
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
+}
+
+/// A mean surface the tracker can query. Implementations must be cheap to call and
+/// deterministic; `Cache` holds per-query state (e.g. a mesh's candidate triangles for the
+/// current segment), created by the tracker for each tracked segment of rays.
+pub trait MeanSurface {
+    type Cache: Default;
+
+    /// The surface at `p`.
+    fn point(&self, p: DVec3) -> Result<SurfacePoint>;
+
+    /// The surface at a point of the segment of the last [`Self::bound`] call with this `cache`;
+    /// may use the cache to answer faster, must answer exactly as [`Self::point`].
+    fn point_on_segment(&self, p: DVec3, _cache: &Self::Cache) -> Result<SurfacePoint> {
+        self.point(p)
+    }
+
+    /// Bounds along `p + s d`, `s ∈ [0, length]`, where `start = point(p)` (`d` unit).
+    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, cache: &mut Self::Cache) -> Result<SegmentBound>;
+
+    /// A box containing every point with `f <= 0` (the mean surface and its interior). Since `f`
+    /// is a signed distance, the box grown by `top` contains the medium's region `f < top`.
+    /// [`Aabb::EVERYTHING`] when the interior is unbounded.
+    fn bounding_box(&self) -> Aabb;
+}

@@ -1,0 +1,62 @@
+//! A sphere as a mean surface: `f = |p − c| − r` (negated with flipped normals), the frame normal
+//! is `∇f` and the tangent Mitsuba 3's `dp/du = pole × (p − c)` (its `u` runs around the pole,
+//! the object's `+z` axis), so anisotropic roughness follows the same direction in both renderers.
+
+use super::{convex_bound, Aabb, Curvature, MeanSurface, SegmentBound, SurfacePoint};
+use crate::error::{check_positive, Error, ErrorKind, Result};
+use crate::frame::check_finite_vector;
+use glam::DVec3;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub center: DVec3,
+    pub radius: f64,
+    /// Normals point inward: the "interior" is everything outside the sphere.
+    pub flip_normals: bool,
+    /// Unit axis of the `u` parametrization (the object's `+z` in world space).
+    pub pole: DVec3,
+}
+
+impl Sphere {
+    pub fn new(center: DVec3, radius: f64, flip_normals: bool, pole: DVec3) -> Result<Sphere> {
+        check_finite_vector("center", center)?;
+        check_positive("radius", radius, false)?;
+        check_finite_vector("pole", pole)?;
+        let pole = pole.try_normalize().ok_or_else(|| Error::new(ErrorKind::InvalidArgument, "pole must not be the zero vector"))?;
+        Ok(Sphere { center, radius, flip_normals, pole })
+    }
+
+    fn sign(&self) -> f64 {
+        if self.flip_normals {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+}
+
+impl MeanSurface for Sphere {
+    type Cache = ();
+
+    fn point(&self, p: DVec3) -> Result<SurfacePoint> {
+        let v = p - self.center;
+        let r = v.length();
+        // At the centre every direction is a gradient; any unit vector keeps the frame valid.
+        let outward = if r > 0.0 { v / r } else { self.pole };
+        Ok(SurfacePoint { f: self.sign() * (r - self.radius), normal: self.sign() * outward, tangent: self.pole.cross(v) })
+    }
+
+    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _: &mut ()) -> Result<SegmentBound> {
+        let end = self.point(p + length * d)?;
+        let curvature = if self.flip_normals { Curvature::Concave } else { Curvature::Convex };
+        Ok(convex_bound(start, &end, d, length, curvature))
+    }
+
+    fn bounding_box(&self) -> Aabb {
+        if self.flip_normals {
+            Aabb::EVERYTHING
+        } else {
+            Aabb { min: self.center - DVec3::splat(self.radius), max: self.center + DVec3::splat(self.radius) }
+        }
+    }
+}

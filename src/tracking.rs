@@ -1,0 +1,420 @@
+//! Tracking through a macrofacet medium around a curved mean surface: free flights (delta
+//! tracking) and transmittance (residual ratio tracking), with majorants built from the planar
+//! closed forms.
+//!
+//! The medium's extinction at `p` for propagation direction `d` is
+//! `σ_t = ρ(f(p)) σ(d_local)` (seeds/000 Eq. 13, 14/31), with `f` and the local frame from the
+//! [`MeanSurface`]. On a segment where the surface guarantees `f >= f_lo(s)` (linear) and
+//! `d·n ∈ [c_lo, c_hi]` ([`SegmentBound`]), the majorant
+//!
+//! `μ(s) = S_up ρ(f_lo(s))`,  `S_up >= σ(d_local)` for every frame with `d·n` in that range,
+//!
+//! bounds `σ_t` (ρ decreases with `f`), and its optical depth and inverse are the closed forms of
+//! a planar shell ([`HeightProfile::density_integral`]). For a planar surface the majorant *is*
+//! `σ_t`: every tentative collision is real. On a thin shell around a curved surface it is tight
+//! to the shell's curvature, so a free flight costs about two surface queries. Tentative
+//! collisions are accepted with probability `σ_t / μ` (delta tracking, Woodcock et al. 1965), so
+//! the estimate is unbiased whatever the curvature, as long as the surface's bounds hold; each
+//! tentative collision checks `σ_t <= μ` and counts violations in [`TrackStats`].
+//!
+//! Transmittance uses a control `μ_c(s) = S_lo ρ(f_hi(s)) <= σ_t` with analytic optical depth and
+//! ratio tracking of the residual (Novák et al. 2014): `T = exp(−∫μ_c) Π (1 − (σ_t − μ_c)/(μ − μ_c))`
+//! over tentative collisions of the residual majorant `μ − μ_c`, obtained by thinning those of
+//! `μ`. A thin shell's shadow ray mostly needs no surface query beyond the segment bounds.
+//!
+//! Directions: `d` is the propagation direction (unit). Random numbers come from a [`Pcg32`] the
+//! caller seeds per call.
+
+use crate::error::{Error, ErrorKind, Result};
+use crate::frame::Frame;
+use crate::height::HeightProfile;
+use crate::medium::MacrofacetMedium;
+use crate::ndf::{MicrofacetDistribution, Ndf};
+use crate::rng::Pcg32;
+use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
+use glam::DVec3;
+
+/// Counts of one tracking call, for tests and benchmarks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TrackStats {
+    /// Calls of [`MeanSurface::point`] / [`MeanSurface::point_on_segment`].
+    pub surface_queries: u32,
+    /// Calls of [`MeanSurface::bound`] (tracked segments).
+    pub segments: u32,
+    /// Tentative collisions at which `σ_t` was evaluated.
+    pub tentative_collisions: u32,
+    /// Tentative collisions where `σ_t > μ` (or `σ_t < μ_c`): the surface's bounds were wrong
+    /// there. Zero for a correct surface.
+    pub majorant_violations: u32,
+}
+
+impl TrackStats {
+    pub fn add(&mut self, other: &TrackStats) {
+        self.surface_queries += other.surface_queries;
+        self.segments += other.segments;
+        self.tentative_collisions += other.tentative_collisions;
+        self.majorant_violations += other.majorant_violations;
+    }
+}
+
+/// The outcome of a tracked free flight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TrackedFlight {
+    /// A real collision at distance `t`, where the surface is `point` (its frame is the local
+    /// frame of the phase function there).
+    Scatter { t: f64, point: SurfacePoint },
+    /// No collision in `[0, t_max]`.
+    Pass,
+}
+
+/// Segments tracked per call before giving up with an error. Empty segments double in length,
+/// so even an unbounded surface with `t_max = +∞` ends long before this.
+const MAX_SEGMENTS: u32 = 1 << 16;
+/// A segment whose bounds of `f` differ by more than this many σ at its end is halved (up to
+/// [`MAX_SHORTENINGS`] times): loose bounds cost tentative collisions.
+const LOOSENESS_SIGMAS: f64 = 1.0;
+const MAX_SHORTENINGS: u32 = 4;
+/// Lipschitz steps above the shell per segment (each one surface query).
+const MAX_SKIPS: u32 = 16;
+/// Default reach of a segment, in σ of change of `f` (covers the shell from its top to deep
+/// below the mean surface, where a collision is nearly certain).
+const SEGMENT_SIGMAS: f64 = 8.0;
+/// Ratio tracking: below this estimate, continue by Russian roulette (unbiased; ends walks into
+/// the opaque interior).
+const ROULETTE_THRESHOLD: f64 = 0.1;
+/// Relative slack of the majorant check (rounding of `f` and of the projected area).
+const VIOLATION_SLACK: f64 = 1e-9;
+/// Tolerance of a surface's frame normal length (hosts compute in `f32`).
+const NORMAL_TOLERANCE: f64 = 1e-4;
+
+/// Upper and lower bounds of `σ(d_local)` over frames with a given range of `d·n`.
+#[derive(Clone, Copy, Debug)]
+struct ProjectedAreaBounds {
+    upper: Ndf,
+    lower: Ndf,
+    lipschitz: f64,
+}
+
+impl ProjectedAreaBounds {
+    fn new(ndf: &Ndf) -> Self {
+        let (upper, lower) = ndf.isotropic_envelope();
+        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz() }
+    }
+
+    /// `(S_up, S_lo)` with `S_lo <= σ(d_local) <= S_up` for every frame whose normal has
+    /// `d·n ∈ [c_lo, c_hi]`, any tangent. `σ(d) = projected_area(−d_local)` sees `w_z = −d·n`;
+    /// over the angle interval the maximum of an L-Lipschitz function is at most the larger end
+    /// value plus `L × width / 2` (and the minimum at least the smaller minus as much).
+    fn range(&self, cos: [f64; 2]) -> (f64, f64) {
+        let area = |ndf: &Ndf, c: f64| ndf.projected_area(DVec3::new((1.0 - c * c).max(0.0).sqrt(), 0.0, -c));
+        let (c_lo, c_hi) = (cos[0].clamp(-1.0, 1.0), cos[1].clamp(-1.0, 1.0));
+        let width = c_hi.acos() - c_lo.acos(); // acos decreases: θ(c_lo) >= θ(c_hi)
+        let slack = 0.5 * self.lipschitz * width.abs();
+        let upper = area(&self.upper, c_lo).max(area(&self.upper, c_hi)) + slack;
+        let lower = (area(&self.lower, c_lo).min(area(&self.lower, c_hi)) - slack).max(0.0);
+        (upper, lower)
+    }
+}
+
+/// Tracking of one medium around one mean surface.
+pub struct Tracker<'a, S: MeanSurface> {
+    medium: &'a MacrofacetMedium,
+    surface: &'a S,
+    area: ProjectedAreaBounds,
+    isotropic: bool,
+}
+
+/// What the previous segment of a ray says about the next one's length.
+#[derive(Clone, Copy, Debug)]
+enum Previous {
+    None,
+    /// It was empty (above the shell) with this length: try at least twice as long.
+    Empty(f64),
+    /// It had to be shortened to this length for tight bounds: try at most twice as long.
+    Shortened(f64),
+}
+
+/// A segment being tracked: where it starts along the ray, its bound and majorant lines.
+struct Segment {
+    t: f64,
+    bound: SegmentBound,
+    s_up: f64,
+    s_lo: f64,
+    shortened: bool,
+}
+
+impl<'a, S: MeanSurface> Tracker<'a, S> {
+    pub fn new(medium: &'a MacrofacetMedium, surface: &'a S) -> Self {
+        Tracker { medium, surface, area: ProjectedAreaBounds::new(&medium.phase.ndf), isotropic: medium.phase.ndf.is_isotropic() }
+    }
+
+    fn height(&self) -> &HeightProfile {
+        &self.medium.height
+    }
+
+    /// `σ_t` at a surface point for propagation direction `d` (world space).
+    pub fn sigma_t(&self, point: &SurfacePoint, d: DVec3) -> f64 {
+        let rho = self.height().density(point.f);
+        if rho == 0.0 {
+            return 0.0;
+        }
+        let d_local = if self.isotropic {
+            // Only the polar angle matters; skip the tangent's Gram–Schmidt.
+            let c = d.dot(point.normal);
+            DVec3::new((1.0 - c * c).max(0.0).sqrt(), 0.0, c)
+        } else {
+            match Frame::from_normal_tangent(point.normal, point.tangent) {
+                Ok(frame) => frame.to_local(d),
+                Err(_) => return f64::NAN, // unreachable: checked points have unit normals
+            }
+        };
+        rho * self.medium.sigma(d_local)
+    }
+
+    fn checked(&self, point: Result<SurfacePoint>, p: DVec3, stats: &mut TrackStats) -> Result<SurfacePoint> {
+        stats.surface_queries += 1;
+        let point = point?;
+        let len = point.normal.length();
+        if point.f.is_nan() || !point.normal.is_finite() || (len - 1.0).abs() > NORMAL_TOLERANCE || !point.tangent.is_finite() {
+            return Err(Error::new(
+                ErrorKind::InvalidArgument,
+                format!(
+                    "the mean surface at {p} returned f = {}, normal {} (length {len}), tangent {}: f must not be NaN, the normal must be unit, the tangent finite",
+                    point.f, point.normal, point.tangent
+                ),
+            ));
+        }
+        Ok(point)
+    }
+
+    /// The interval of the ray inside the region's bounding box (the surface's box grown by the
+    /// shell's top), clipped to `[0, t_max]`.
+    fn clip(&self, origin: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
+        let region = self.surface.bounding_box().grown(self.height().top() * (1.0 + 1e-9));
+        region.clip(origin, d, 0.0, t_max)
+    }
+
+    /// The length to ask the surface for: enough for `f` to change by [`SEGMENT_SIGMAS`] σ below
+    /// where the shell begins, longer across empty space, doubling after an empty segment.
+    fn segment_length(&self, start: &SurfacePoint, d: DVec3, previous: Previous) -> f64 {
+        let (sigma, top) = (self.height().sigma, self.height().top());
+        // Rays within ~7° of the surface are treated as grazing: the bound, not the cosine,
+        // then limits the segment.
+        let c = d.dot(start.normal);
+        let rate = c.abs().max(0.125);
+        let approach = if start.f > top { (start.f - top) / rate } else { 0.0 };
+        let length = approach + SEGMENT_SIGMAS * sigma / rate;
+        match previous {
+            Previous::None => length,
+            Previous::Empty(l) => length.max(2.0 * l),
+            Previous::Shortened(l) => length.min(2.0 * l),
+        }
+    }
+
+    /// Far above the shell, steps of `f − top` (the signed distance is 1-Lipschitz, so the shell
+    /// cannot begin before): cheaper than bounding a long segment with many candidate features.
+    /// Returns the new position and its surface point.
+    fn skip_above(&self, mut t: f64, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
+        let (sigma, top) = (self.height().sigma, self.height().top());
+        for _ in 0..MAX_SKIPS {
+            if !(start.f > top + SEGMENT_SIGMAS * sigma) || !(t < t_exit) {
+                break;
+            }
+            t += start.f - top;
+            if !(t < t_exit) {
+                break;
+            }
+            let p = origin + t * d;
+            start = self.checked(self.surface.point(p), p, stats)?;
+        }
+        Ok((t, start))
+    }
+
+    /// Asks the surface for the bound of the next segment, shortening it while it is loose.
+    #[allow(clippy::too_many_arguments)]
+    fn next_segment(&self, t: f64, start: &SurfacePoint, origin: DVec3, d: DVec3, remaining: f64, previous: Previous, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<Segment> {
+        let p = origin + t * d;
+        let sigma = self.height().sigma;
+        let mut length = self.segment_length(start, d, previous).min(remaining);
+        let mut shortenings = 0;
+        loop {
+            stats.segments += 1;
+            let mut bound = self.surface.bound(start, p, d, length, cache)?;
+            bound.validate(length, start.f, "the mean surface")?;
+            // A side without a bound gets the Lipschitz bound every signed distance has.
+            let lipschitz = SegmentBound::lipschitz(start.f, bound.length);
+            if bound.f_lo.iter().any(|v| v.is_infinite()) {
+                bound.f_lo = lipschitz.f_lo;
+            }
+            if bound.f_hi.iter().any(|v| v.is_infinite()) {
+                bound.f_hi = lipschitz.f_hi;
+            }
+            let loose = (bound.f_hi[0] - bound.f_lo[0]).max(bound.f_hi[1] - bound.f_lo[1]) > LOOSENESS_SIGMAS * sigma;
+            if loose && shortenings < MAX_SHORTENINGS && bound.length > 2.0 * sigma {
+                shortenings += 1;
+                length = 0.5 * bound.length;
+                continue;
+            }
+            let (s_up, s_lo) = self.area.range(bound.cos);
+            return Ok(Segment { t, bound, s_up, s_lo, shortened: shortenings > 0 });
+        }
+    }
+
+    /// True when the segment's majorant is zero throughout: it lies above the shell.
+    fn is_empty(&self, seg: &Segment) -> bool {
+        seg.s_up == 0.0 || self.height().density(seg.bound.f_lo[0].min(seg.bound.f_lo[1])) == 0.0
+    }
+
+    /// The majorant `μ(s)` of a segment at `s`.
+    fn majorant(&self, seg: &Segment, s: f64) -> f64 {
+        let (f0, slope) = seg.bound.lower_line();
+        seg.s_up * self.height().density(f0 + slope * s)
+    }
+
+    /// The control `μ_c(s) <= σ_t` of a segment at `s` (zero without an upper bound of `f`).
+    fn control(&self, seg: &Segment, s: f64) -> f64 {
+        let (f0, slope) = seg.bound.upper_line();
+        if seg.s_lo == 0.0 {
+            return 0.0;
+        }
+        seg.s_lo * self.height().density(f0 + slope * s)
+    }
+
+    /// The next tentative collision of the majorant after `s` on the segment, or `None` at its
+    /// end: inverts `S_up ∫ρ(f_lo)` at an exponential variate.
+    fn next_tentative(&self, seg: &Segment, s: f64, rng: &mut Pcg32) -> Option<f64> {
+        if seg.s_up == 0.0 {
+            return None;
+        }
+        let (f0, slope) = seg.bound.lower_line();
+        let target = -rng.next_f64_open().ln() / seg.s_up;
+        self.height().invert_density_integral(f0 + slope * s, slope, seg.bound.length - s, target).map(|ds| s + ds)
+    }
+
+    /// The start of the segment after `seg`: the bound's end point or a fresh query.
+    fn advance(&self, seg: &Segment, origin: DVec3, d: DVec3, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
+        let t = seg.t + seg.bound.length;
+        let p = origin + t * d;
+        let start = match seg.bound.end {
+            Some(end) => self.checked(Ok(end), p, stats)?,
+            None => self.checked(self.surface.point(p), p, stats)?,
+        };
+        Ok((t, start))
+    }
+
+    /// Samples a free flight along `origin + t d`, `t ∈ [0, t_max]` (`t_max` may be `+∞`), by
+    /// delta tracking against the segment majorants.
+    pub fn sample_free_flight(&self, origin: DVec3, d: DVec3, t_max: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<TrackedFlight> {
+        let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(TrackedFlight::Pass) };
+        let mut cache = S::Cache::default();
+        let mut t = t_enter;
+        let mut start = self.checked(self.surface.point(origin + t * d), origin + t * d, stats)?;
+        let mut previous = Previous::None;
+        for _ in 0..MAX_SEGMENTS {
+            (t, start) = self.skip_above(t, start, origin, d, t_exit, stats)?;
+            if !(t < t_exit) {
+                return Ok(TrackedFlight::Pass);
+            }
+            let seg = self.next_segment(t, &start, origin, d, t_exit - t, previous, &mut cache, stats)?;
+            let mut s = 0.0;
+            let mut tentative = false;
+            while let Some(next) = self.next_tentative(&seg, s, rng) {
+                s = next;
+                tentative = true;
+                let p = origin + (seg.t + s) * d;
+                let point = self.checked(self.surface.point_on_segment(p, &cache), p, stats)?;
+                let sigma_t = self.sigma_t(&point, d);
+                let mu = self.majorant(&seg, s);
+                stats.tentative_collisions += 1;
+                if sigma_t > mu * (1.0 + VIOLATION_SLACK) {
+                    stats.majorant_violations += 1;
+                }
+                if rng.next_f64() * mu < sigma_t {
+                    return Ok(TrackedFlight::Scatter { t: seg.t + s, point });
+                }
+            }
+            previous = if !tentative && self.is_empty(&seg) {
+                Previous::Empty(seg.bound.length)
+            } else if seg.shortened {
+                Previous::Shortened(seg.bound.length)
+            } else {
+                Previous::None
+            };
+            (t, start) = self.advance(&seg, origin, d, stats)?;
+        }
+        Err(Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)")))
+    }
+
+    /// An unbiased estimate of the transmittance along `origin + t d`, `t ∈ [0, t_max]`, by
+    /// residual ratio tracking against the segment majorants and controls.
+    pub fn transmittance(&self, origin: DVec3, d: DVec3, t_max: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<f64> {
+        let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(1.0) };
+        let mut cache = S::Cache::default();
+        let mut t = t_enter;
+        let mut start = self.checked(self.surface.point(origin + t * d), origin + t * d, stats)?;
+        let mut transmittance = 1.0;
+        let mut previous = Previous::None;
+        for _ in 0..MAX_SEGMENTS {
+            (t, start) = self.skip_above(t, start, origin, d, t_exit, stats)?;
+            if !(t < t_exit) {
+                return Ok(transmittance);
+            }
+            let seg = self.next_segment(t, &start, origin, d, t_exit - t, previous, &mut cache, stats)?;
+            // The control's optical depth, in closed form.
+            let (h0, h_slope) = seg.bound.upper_line();
+            if seg.s_lo > 0.0 {
+                transmittance *= (-seg.s_lo * self.height().density_integral(h0, h_slope, seg.bound.length)).exp();
+                if !roulette(&mut transmittance, rng) {
+                    return Ok(0.0);
+                }
+            }
+            let mut s = 0.0;
+            let mut tentative = false;
+            while let Some(next) = self.next_tentative(&seg, s, rng) {
+                s = next;
+                tentative = true;
+                let (mu, mu_c) = (self.majorant(&seg, s), self.control(&seg, s));
+                // Thinning: the residual's tentative collisions are those of μ kept with
+                // probability (μ − μ_c)/μ; the rest belong to the control, already integrated.
+                if !(rng.next_f64() * mu < mu - mu_c) {
+                    continue;
+                }
+                let p = origin + (seg.t + s) * d;
+                let point = self.checked(self.surface.point_on_segment(p, &cache), p, stats)?;
+                let sigma_t = self.sigma_t(&point, d);
+                stats.tentative_collisions += 1;
+                if sigma_t > mu * (1.0 + VIOLATION_SLACK) || sigma_t < mu_c * (1.0 - VIOLATION_SLACK) {
+                    stats.majorant_violations += 1;
+                }
+                transmittance *= (1.0 - (sigma_t - mu_c) / (mu - mu_c)).clamp(0.0, 1.0);
+                if !roulette(&mut transmittance, rng) {
+                    return Ok(0.0);
+                }
+            }
+            previous = if !tentative && self.is_empty(&seg) {
+                Previous::Empty(seg.bound.length)
+            } else if seg.shortened {
+                Previous::Shortened(seg.bound.length)
+            } else {
+                Previous::None
+            };
+            (t, start) = self.advance(&seg, origin, d, stats)?;
+        }
+        Err(Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)")))
+    }
+}
+
+/// Russian roulette on a transmittance estimate below [`ROULETTE_THRESHOLD`]: survives with
+/// probability `T / threshold` and continues with `T = threshold` (unbiased). False when killed.
+fn roulette(transmittance: &mut f64, rng: &mut Pcg32) -> bool {
+    if *transmittance >= ROULETTE_THRESHOLD {
+        return true;
+    }
+    if rng.next_f64() * ROULETTE_THRESHOLD < *transmittance {
+        *transmittance = ROULETTE_THRESHOLD;
+        true
+    } else {
+        *transmittance = 0.0;
+        false
+    }
+}

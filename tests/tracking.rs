@@ -1,0 +1,399 @@
+//! The tracker around curved mean surfaces (issue "the library owns the volume event"):
+//! free-flight distances against the exact distribution from quadrature of `σ_t` along the ray
+//! (Kolmogorov–Smirnov) and against a brute-force delta tracker with a loose constant majorant
+//! (two-sample KS), transmittance estimates against the exact transmittance, and no majorant
+//! violation on spheres of radius 10σ, sharp-edged and non-convex meshes, and a smooth torus.
+
+mod common;
+
+use common::meshes::{self, Mesh};
+use glam::{DVec2, DVec3};
+use macrofacet::height::HeightProfile;
+use macrofacet::ndf::{Beckmann, Gpss, MicrofacetDistribution, Ndf};
+use macrofacet::rng::Pcg32;
+use macrofacet::special::normal_cdf;
+use macrofacet::stats::{kolmogorov_sf, ks_test, mean_and_standard_error, sidak_alpha};
+use macrofacet::surface::{MeanSurface, Sphere, TriangleMesh};
+use macrofacet::tracking::{TrackStats, TrackedFlight, Tracker};
+use macrofacet::{MacrofacetMedium, MacrofacetPhase, MicroBsdf, VndfSampling};
+
+fn medium(ndf: Ndf, sigma: f64) -> MacrofacetMedium {
+    MacrofacetMedium {
+        height: HeightProfile::new(sigma, 3.0).unwrap(),
+        phase: MacrofacetPhase { ndf, micro_bsdf: MicroBsdf::Mirror { specular_reflectance: [1.0; 3] }, sampling: VndfSampling::Exact },
+    }
+}
+
+fn mesh_surface(m: &Mesh) -> TriangleMesh {
+    TriangleMesh::new(&m.positions, &m.indices, m.normals.as_deref(), None::<&[DVec2]>).unwrap()
+}
+
+/// `τ(t)` along a ray by Gauss–Legendre panels of `σ/20`, tabulated at the panel edges up to
+/// `t_max` or until `τ > 60`.
+struct OpticalDepth {
+    h: f64,
+    tau: Vec<f64>,
+}
+
+impl OpticalDepth {
+    fn new<S: MeanSurface>(tracker: &Tracker<S>, surface: &S, sigma: f64, o: DVec3, d: DVec3, t_max: f64) -> Self {
+        let h = sigma / 20.0;
+        let nodes = common::gauss_legendre(4);
+        let mut tau = vec![0.0];
+        let mut t = 0.0;
+        while t < t_max && *tau.last().unwrap() < 60.0 {
+            let mut panel = 0.0;
+            for &(x, w) in &nodes {
+                let s = t + 0.5 * h * (1.0 + x);
+                panel += 0.5 * h * w * tracker.sigma_t(&surface.point(o + s * d).unwrap(), d);
+            }
+            tau.push(tau.last().unwrap() + panel);
+            t += h;
+        }
+        OpticalDepth { h, tau }
+    }
+
+    fn at(&self, t: f64) -> f64 {
+        let x = t / self.h;
+        let i = x.floor() as usize;
+        if i + 1 >= self.tau.len() {
+            return *self.tau.last().unwrap() * if self.tau.last().unwrap() >= &60.0 { f64::INFINITY } else { 1.0 };
+        }
+        let f = x - i as f64;
+        self.tau[i] * (1.0 - f) + self.tau[i + 1] * f
+    }
+}
+
+/// A brute-force free flight: delta tracking with constant majorants over segments of length
+/// `max(σ, |f|/2)` from the Lipschitz bound `f >= f(t) − Δ`, times the largest projected area
+/// over a 1° grid of directions (×1.1) — loose, simple, sharing nothing with the tracker's bounds.
+fn brute_force_flight<S: MeanSurface>(tracker: &Tracker<S>, surface: &S, m: &MacrofacetMedium, s_max: f64, o: DVec3, d: DVec3, t_max: f64, rng: &mut Pcg32) -> Option<f64> {
+    let (sigma, top) = (m.height.sigma, m.height.top());
+    let mut t = 0.0;
+    while t < t_max {
+        let f0 = surface.point(o + t * d).unwrap().f;
+        if f0 > top + sigma {
+            t += f0 - top;
+            continue;
+        }
+        let len = sigma.max(0.5 * f0.abs()).min(t_max - t);
+        let mu = s_max * m.height.density(f0 - len);
+        let end = t + len;
+        loop {
+            t += -rng.next_f64_open().ln() / mu;
+            if t >= end {
+                t = end;
+                break;
+            }
+            let st = tracker.sigma_t(&surface.point(o + t * d).unwrap(), d);
+            assert!(st <= mu, "brute-force majorant exceeded");
+            if rng.next_f64() * mu < st {
+                return Some(t);
+            }
+        }
+    }
+    None
+}
+
+fn largest_projected_area(ndf: &Ndf) -> f64 {
+    let mut s_max: f64 = 0.0;
+    for i in 0..=180 {
+        for j in 0..360 {
+            let (th, ph) = ((i as f64).to_radians(), (j as f64).to_radians());
+            s_max = s_max.max(ndf.projected_area(DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos())));
+        }
+    }
+    1.1 * s_max
+}
+
+/// Two-sample Kolmogorov–Smirnov p-value.
+fn ks_two_sample(a: &mut [f64], b: &mut [f64]) -> f64 {
+    a.sort_by(f64::total_cmp);
+    b.sort_by(f64::total_cmp);
+    let (n, m) = (a.len() as f64, b.len() as f64);
+    let (mut i, mut j, mut d) = (0, 0, 0.0f64);
+    while i < a.len() && j < b.len() {
+        let x = a[i].min(b[j]);
+        while i < a.len() && a[i] <= x {
+            i += 1;
+        }
+        while j < b.len() && b[j] <= x {
+            j += 1;
+        }
+        d = d.max((i as f64 / n - j as f64 / m).abs());
+    }
+    let ne = (n * m / (n + m)).sqrt();
+    kolmogorov_sf((ne + 0.12 + 0.11 / ne) * d)
+}
+
+struct Case {
+    name: &'static str,
+    origin: DVec3,
+    d: DVec3,
+    t_max: f64,
+}
+
+fn ray(name: &'static str, origin: DVec3, toward: DVec3, t_max: f64) -> Case {
+    Case { name, origin, d: (toward - origin).normalize(), t_max }
+}
+
+/// Checks one surface: per ray, free flights (KS vs exact, pass fraction) and transmittance
+/// (mean vs exact); returns the number of statistical comparisons failed and the stats.
+fn check_surface<S: MeanSurface>(label: &str, m: &MacrofacetMedium, surface: &S, cases: &[Case], n: usize, alpha: f64, seed: u64) -> (usize, TrackStats) {
+    let tracker = Tracker::new(m, surface);
+    let mut failures = 0;
+    let mut total = TrackStats::default();
+    for (k, case) in cases.iter().enumerate() {
+        let tau = OpticalDepth::new(&tracker, surface, m.height.sigma, case.origin, case.d, case.t_max);
+        let tau_max = tau.at(case.t_max);
+        let p_pass = (-tau_max).exp();
+        let mut rng = Pcg32::new(seed, k as u64);
+        let mut stats = TrackStats::default();
+        let mut distances = Vec::new();
+        for _ in 0..n {
+            let mut one = TrackStats::default();
+            let seed = rng.next_u32() as u64 | (rng.next_u32() as u64) << 32;
+            match tracker.sample_free_flight(case.origin, case.d, case.t_max, &mut Pcg32::new(seed, 1), &mut one).unwrap() {
+                TrackedFlight::Scatter { t, point } => {
+                    assert!(t >= 0.0 && t <= case.t_max, "{label}/{}: t = {t} outside [0, {}]", case.name, case.t_max);
+                    assert!((point.f - surface.point(case.origin + t * case.d).unwrap().f).abs() < 1e-9);
+                    distances.push(t);
+                }
+                TrackedFlight::Pass => {}
+            }
+            stats.add(&one);
+        }
+        // Free flights: scattered distances vs the exact conditional CDF, pass count vs exp(-τ).
+        let scattered = distances.len();
+        let ks = if scattered > 0 && p_pass < 1.0 {
+            ks_test(&mut distances, |t| (-(-tau.at(t)).exp_m1()) / (-(-tau_max).exp_m1())).p_value
+        } else {
+            1.0
+        };
+        let var = p_pass * (1.0 - p_pass) / n as f64;
+        let z_pass = if var > 0.0 { ((n - scattered) as f64 / n as f64 - p_pass) / var.sqrt() } else { 0.0 };
+        let p_binomial = 2.0 * normal_cdf(-z_pass.abs());
+        // Transmittance: the mean of the estimates vs exp(-τ).
+        let estimates: Vec<f64> = (0..n)
+            .map(|i| {
+                let mut one = TrackStats::default();
+                let t = tracker.transmittance(case.origin, case.d, case.t_max, &mut Pcg32::new(seed ^ 0x5eed, (k * n + i) as u64), &mut one).unwrap();
+                assert!((0.0..=1.0).contains(&t));
+                stats.add(&one);
+                t
+            })
+            .collect();
+        let (mean, se) = mean_and_standard_error(estimates.iter().copied());
+        // Rare non-zero estimates (Russian roulette) can leave every sample at 0: the variance of
+        // an estimator in [0, 1] is at most its mean, which floors the standard error.
+        let se = se.max((p_pass.max(mean) / n as f64).sqrt().min(1.0) * 0.0 + 0.0).max(if mean == 0.0 { (p_pass / n as f64).sqrt() } else { 0.0 });
+        // The quadrature's own error (panels of σ/20 across the jump of ρ at the top face).
+        let z_t = (mean - p_pass) / (se + 1e-3 * p_pass.max(1e-3));
+        let p_t = 2.0 * normal_cdf(-z_t.abs());
+        let ok = ks > alpha && p_binomial > alpha && p_t > alpha;
+        println!(
+            "{label}/{}: P(pass) exact {p_pass:.5}, KS p {ks:.3}, pass z {z_pass:+.2}; T mean {mean:.5} ± {se:.5} (z {z_t:+.2}); per flight+T: {:.2} queries, {:.2} segments, {:.2} tentative; violations {}",
+            case.name,
+            stats.surface_queries as f64 / (2 * n) as f64,
+            stats.segments as f64 / (2 * n) as f64,
+            stats.tentative_collisions as f64 / (2 * n) as f64,
+            stats.majorant_violations
+        );
+        if !ok {
+            failures += 1;
+            println!("  FAILED at alpha {alpha:.2e}");
+        }
+        total.add(&stats);
+    }
+    (failures, total)
+}
+
+fn sphere_cases(r: f64, sigma: f64) -> Vec<Case> {
+    let top = r + 3.0 * sigma;
+    let far = 4.0 * r;
+    vec![
+        ray("normal", DVec3::new(-far, 0.0, 0.0), DVec3::ZERO, 8.0 * r),
+        ray("oblique", DVec3::new(-far, 0.6 * r, 0.1 * r), DVec3::new(0.0, 0.6 * r, 0.1 * r), 8.0 * r),
+        ray("grazing_shell", DVec3::new(-far, 0.0, r + sigma), DVec3::new(0.0, 0.0, r + sigma), 8.0 * r),
+        ray("grazing_top", DVec3::new(-far, 0.0, top - 0.3 * sigma), DVec3::new(0.0, 0.0, top - 0.3 * sigma), 8.0 * r),
+        ray("leaving", DVec3::new(0.0, 0.0, r - 0.5 * sigma), DVec3::new(1.0, 0.0, r + 0.3), 3.0 * r),
+        ray("short_inside", DVec3::new(0.0, 0.0, r + 0.5 * sigma), DVec3::new(0.2 * r, 0.0, r - sigma), 0.2 * r),
+    ]
+}
+
+#[test]
+fn sphere_of_radius_ten_sigma() {
+    let (r, sigma) = (1.0, 0.1);
+    let sphere = Sphere::new(DVec3::new(0.1, -0.2, 0.3), r, false, DVec3::new(0.3, 0.4, 1.0)).unwrap();
+    let shift = |c: Vec<Case>| c.into_iter().map(|c| Case { origin: c.origin + sphere.center, ..c }).collect::<Vec<_>>();
+    let media = [
+        ("beckmann_aniso", medium(Ndf::Beckmann(Beckmann::new(0.2, 0.6).unwrap()), sigma)),
+        ("gpss_iso", medium(Ndf::Gpss(Gpss::new(1.0, 1.0, 1.0).unwrap()), sigma)),
+    ];
+    let cases = shift(sphere_cases(r, sigma));
+    let alpha = sidak_alpha(0.01, 3 * cases.len() * media.len());
+    let mut failures = 0;
+    for (k, (name, m)) in media.iter().enumerate() {
+        let (f, stats) = check_surface(name, m, &sphere, &cases, 3000, alpha, 11 + k as u64);
+        failures += f;
+        assert_eq!(stats.majorant_violations, 0, "{name}: majorant violated");
+    }
+    assert_eq!(failures, 0);
+}
+
+#[test]
+fn meshes_with_sharp_and_reflex_edges_and_a_smooth_torus() {
+    let gpss = |sigma| medium(Ndf::Gpss(Gpss::new(0.5, 0.3, 0.25).unwrap()), sigma);
+    let cube = mesh_surface(&meshes::cube());
+    let l = mesh_surface(&meshes::l_prism());
+    let torus = mesh_surface(&meshes::torus(1.0, 0.4, 32, 16));
+    let sigma = 0.02;
+    let s = sigma;
+    let cube_cases = vec![
+        ray("edge_grazing", DVec3::new(-3.0, 1.0 + s, 1.0 + 2.0 * s), DVec3::new(3.0, 1.0 + s, 1.0 + 2.0 * s), 7.0),
+        ray("corner", DVec3::new(-3.0, -3.0, 3.0), DVec3::new(1.0 + s, 1.0 + s, -1.0 - s), 8.0),
+        ray("across_edge", DVec3::new(-1.5, 0.0, 1.3), DVec3::new(-0.7, 0.0, 0.95), 3.0),
+        ray("inside_out", DVec3::new(0.9, 0.95, 0.99), DVec3::new(1.5, 1.5, 1.6), 2.0),
+    ];
+    let l_cases = vec![
+        ray("into_reflex", DVec3::new(2.0, 2.0, 0.5), DVec3::new(1.0, 1.0, 0.5), 3.0),
+        ray("along_reflex", DVec3::new(1.0 + s, 1.0 + s, -1.0), DVec3::new(1.0 + s, 1.0 + s, 2.0), 4.0),
+        ray("skim_inner_faces", DVec3::new(3.0, 1.0 + 2.0 * s, 0.4), DVec3::new(0.5, 1.0 + 2.0 * s, 0.4), 4.0),
+    ];
+    let torus_cases = vec![
+        ray("through_hole", DVec3::new(-3.0, 0.1, 0.2), DVec3::new(3.0, 0.1, 0.2), 7.0),
+        ray("top_grazing", DVec3::new(-3.0, 0.0, 0.4 + s), DVec3::new(3.0, 0.0, 0.4 + s), 7.0),
+        ray("oblique", DVec3::new(-2.0, -2.0, 2.0), DVec3::new(1.0, 0.3, 0.0), 6.0),
+        ray("inner_rim", DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.6 - s, 0.0, 0.0), 3.0),
+    ];
+    let sets: [(&str, &TriangleMesh, &[Case]); 3] = [("cube", &cube, &cube_cases), ("l_prism", &l, &l_cases), ("torus", &torus, &torus_cases)];
+    let n_tests: usize = sets.iter().map(|(_, _, c)| 3 * c.len()).sum();
+    let alpha = sidak_alpha(0.01, n_tests);
+    let mut failures = 0;
+    for (k, (name, surface, cases)) in sets.iter().enumerate() {
+        let (f, stats) = check_surface(name, &gpss(sigma), *surface, cases, 2000, alpha, 23 + k as u64);
+        failures += f;
+        assert_eq!(stats.majorant_violations, 0, "{name}: majorant violated");
+    }
+    assert_eq!(failures, 0);
+}
+
+#[test]
+fn brute_force_delta_tracking_agrees() {
+    // Two-sample KS of free-flight distances (scattered) and a comparison of pass fractions.
+    let m = medium(Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), 0.1);
+    let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
+    let cube = mesh_surface(&meshes::cube());
+    let s_max = largest_projected_area(&m.phase.ndf);
+    let n = 4000;
+    let cases_sphere = sphere_cases(1.0, 0.1);
+    let cases_cube = [ray("corner", DVec3::new(-3.0, -3.0, 3.0), DVec3::new(1.1, 1.1, -1.1), 8.0), ray("edge", DVec3::new(-3.0, 1.1, 1.2), DVec3::new(3.0, 1.1, 1.2), 7.0)];
+    let alpha = sidak_alpha(0.01, 2 * (cases_sphere.len() + cases_cube.len()));
+    let mut run = |label: &str, surface: &dyn Fn(DVec3, DVec3, f64, &mut Pcg32, bool) -> Option<f64>, case: &Case, k: u64| {
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        let mut rng = Pcg32::new(99, k);
+        for _ in 0..n {
+            if let Some(t) = surface(case.origin, case.d, case.t_max, &mut rng, true) {
+                a.push(t);
+            }
+            if let Some(t) = surface(case.origin, case.d, case.t_max, &mut rng, false) {
+                b.push(t);
+            }
+        }
+        let p = if a.len() > 10 && b.len() > 10 { ks_two_sample(&mut a, &mut b) } else { 1.0 };
+        let (pa, pb) = (1.0 - a.len() as f64 / n as f64, 1.0 - b.len() as f64 / n as f64);
+        let pooled = 0.5 * (pa + pb);
+        let se = (2.0 * pooled * (1.0 - pooled) / n as f64).sqrt();
+        let z = if se > 0.0 { (pa - pb) / se } else { 0.0 };
+        println!("{label}/{}: KS p {p:.3}, P(pass) tracker {pa:.4} vs brute force {pb:.4} (z {z:+.2})", case.name);
+        assert!(p > alpha && 2.0 * normal_cdf(-z.abs()) > alpha, "{label}/{}: tracker and brute force disagree", case.name);
+    };
+    let tracker = Tracker::new(&m, &sphere);
+    let flight = |o, d, t_max, rng: &mut Pcg32, fast: bool| {
+        if fast {
+            match tracker.sample_free_flight(o, d, t_max, rng, &mut TrackStats::default()).unwrap() {
+                TrackedFlight::Scatter { t, .. } => Some(t),
+                TrackedFlight::Pass => None,
+            }
+        } else {
+            brute_force_flight(&tracker, &sphere, &m, s_max, o, d, t_max, rng)
+        }
+    };
+    for (k, case) in cases_sphere.iter().enumerate() {
+        run("sphere", &flight, case, k as u64);
+    }
+    let tracker = Tracker::new(&m, &cube);
+    let flight = |o, d, t_max, rng: &mut Pcg32, fast: bool| {
+        if fast {
+            match tracker.sample_free_flight(o, d, t_max, rng, &mut TrackStats::default()).unwrap() {
+                TrackedFlight::Scatter { t, .. } => Some(t),
+                TrackedFlight::Pass => None,
+            }
+        } else {
+            brute_force_flight(&tracker, &cube, &m, s_max, o, d, t_max, rng)
+        }
+    };
+    for (k, case) in cases_cube.iter().enumerate() {
+        run("cube", &flight, case, 100 + k as u64);
+    }
+}
+
+#[test]
+fn planar_surface_makes_every_tentative_collision_real() {
+    // Near the centre of a large cube's face the mean surface is a plane: the majorant is σ_t.
+    let m = medium(Ndf::Gpss(Gpss::new(0.4, 0.4, 0.2).unwrap()), 0.01);
+    let mut big = meshes::cube();
+    for p in &mut big.positions {
+        *p *= 100.0;
+    }
+    let surface = mesh_surface(&big);
+    let tracker = Tracker::new(&m, &surface);
+    let mut stats = TrackStats::default();
+    let mut rng = Pcg32::new(5, 5);
+    let mut scatters = 0;
+    for i in 0..2000 {
+        let theta = 0.1 + 1.3 * (i as f64 / 2000.0);
+        let d = DVec3::new(theta.sin(), 0.0, -theta.cos());
+        let o = DVec3::new(0.0, 30.0, 100.05) - 0.02 * d;
+        if let TrackedFlight::Scatter { .. } = tracker.sample_free_flight(o, d, 1.0, &mut rng, &mut stats).unwrap() {
+            scatters += 1;
+        }
+    }
+    println!("planar: {stats:?}, {scatters} scatters");
+    assert_eq!(stats.majorant_violations, 0);
+    assert_eq!(stats.tentative_collisions, scatters, "a tentative collision was rejected on a plane");
+}
+
+#[test]
+fn mesh_distance_matches_brute_force_and_bounds_hold() {
+    // The hierarchy's closest point equals the minimum over all triangles; along random short
+    // segments near the surface, f and d·n stay within the segment bounds.
+    for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 24, 12)), ("l_prism", meshes::l_prism()), ("sphere", meshes::uv_sphere(1.0, 12, 24))] {
+        let surface = mesh_surface(&mesh);
+        let flat = mesh_surface(&Mesh { normals: None, ..mesh });
+        let mut rng = Pcg32::new(3, 4);
+        let mut cache = Default::default();
+        for _ in 0..3000 {
+            let p = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 3.0 - DVec3::splat(1.0);
+            let d = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
+            for s in [&surface, &flat] {
+                let start = s.point(p).unwrap();
+                let length = 0.3 * rng.next_f64() + 1e-3;
+                let b = s.bound(&start, p, d, length, &mut cache).unwrap();
+                b.validate(length, start.f, name).unwrap();
+                let (lo0, lo_k) = b.lower_line();
+                let (hi0, hi_k) = b.upper_line();
+                for j in 0..=50 {
+                    let t = b.length * j as f64 / 50.0;
+                    let q = s.point_on_segment(p + t * d, &cache).unwrap();
+                    let exact = s.point(p + t * d).unwrap();
+                    assert!((q.f - exact.f).abs() <= 1e-12 * (1.0 + exact.f.abs()), "{name}: cached query differs");
+                    let tol = 1e-9 * (1.0 + q.f.abs());
+                    assert!(q.f >= lo0 + lo_k * t - tol && q.f <= hi0 + hi_k * t + tol, "{name}: f = {} outside [{}, {}] at s = {t}", q.f, lo0 + lo_k * t, hi0 + hi_k * t);
+                    let c = d.dot(q.normal);
+                    assert!(c >= b.cos[0] - 1e-9 && c <= b.cos[1] + 1e-9, "{name}: d.n = {c} outside {:?}", b.cos);
+                }
+            }
+        }
+    }
+}

@@ -103,3 +103,12 @@ if(MF_TEST_CARGO)
       --manifest-path "${CMAKE_CURRENT_SOURCE_DIR}/Cargo.toml" --target-dir "${CMAKE_BINARY_DIR}/cargo-test" ${MF_CARGO_FLAGS})
   set_tests_properties(rust_ffi_abi PROPERTIES TIMEOUT 600)
 endif()
+
+# The integration example of the README ("Use it in your renderer"): a plain-C path tracer that
+# renders a thin-shell and a fuzzy sphere with the tracking API; built with the ABI tests' strict
+# warnings and run small (it exits 1 on any library error or a non-finite/zero image).
+add_executable(render_spheres "${CMAKE_CURRENT_SOURCE_DIR}/examples/c/render_spheres.c")
+set_target_properties(render_spheres PROPERTIES C_STANDARD 11 C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
+target_compile_options(render_spheres PRIVATE ${MF_C_WARNINGS})
+target_link_libraries(render_spheres PRIVATE macrofacet::macrofacet_static m)
+add_test(NAME example_render_spheres COMMAND render_spheres 64 32 8 "${CMAKE_CURRENT_BINARY_DIR}/render_spheres.ppm")

@@ -67,4 +67,128 @@ fn main() {
     });
     time("gpss Au phase: eval(wi, wo)", |i| medium.phase.eval(dirs[i], dirs[(i + 1) % N])[0]);
     time("gpss Au phase: sample(wi, u)", |i| medium.phase.sample(dirs[i], us[i]).map_or(0.0, |s| s.pdf));
+
+    bench_closest();
+    println!("\n== tracking (library tracker, per call)");
+    tracking_benchmarks();
+}
+
+/// Mesh generators shared with the integration tests.
+#[path = "../tests/common/meshes.rs"]
+mod meshes;
+
+use macrofacet::surface::{MeanSurface, Sphere, TriangleMesh};
+use macrofacet::tracking::{TrackStats, TrackedFlight, Tracker};
+
+/// Rays as a renderer's region boundary hands them to the tracker: starting `gap` above the
+/// shell's top over a random point of the surface, heading inward (cosine-weighted about the
+/// normal); then a shadow ray from each collision in a random upper-hemisphere direction.
+fn bench_tracking<S: MeanSurface>(label: &str, medium: &macrofacet::MacrofacetMedium, surface: &S, points: &[(DVec3, DVec3)], gap: f64) {
+    let tracker = Tracker::new(medium, surface);
+    let top = medium.height.top();
+    let mut rng = Pcg32::new(9, 9);
+    let rays: Vec<(DVec3, DVec3)> = points
+        .iter()
+        .map(|&(p, n)| {
+            let (s, t) = n.any_orthonormal_pair();
+            let (r, phi) = (rng.next_f64().sqrt(), 2.0 * std::f64::consts::PI * rng.next_f64());
+            let d = -(n * (1.0 - r * r).max(0.0).sqrt() + s * (r * phi.cos()) + t * (r * phi.sin()));
+            (p + n * (top + gap * rng.next_f64()), d)
+        })
+        .collect();
+    let (mut flights, mut shadows) = (TrackStats::default(), TrackStats::default());
+    let mut collisions = Vec::new();
+    let start = Instant::now();
+    for (i, &(o, d)) in rays.iter().enumerate() {
+        if let TrackedFlight::Scatter { t, point } = tracker.sample_free_flight(o, d, f64::INFINITY, &mut Pcg32::new(i as u64, 1), &mut flights).unwrap() {
+            collisions.push((o + t * d, point.normal));
+        }
+    }
+    let flight_time = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let mut sum = 0.0;
+    for (i, &(p, n)) in collisions.iter().enumerate() {
+        let mut d = uniform_direction(&mut rng);
+        if d.dot(n) < 0.0 {
+            d = -d;
+        }
+        sum += tracker.transmittance(p, d, f64::INFINITY, &mut Pcg32::new(i as u64, 2), &mut shadows).unwrap();
+    }
+    let shadow_time = start.elapsed().as_secs_f64();
+    black_box(sum);
+    let per = |s: &TrackStats, n: usize| (s.surface_queries as f64 / n as f64, s.segments as f64 / n as f64, s.tentative_collisions as f64 / n as f64);
+    let (q, g, c) = per(&flights, rays.len());
+    println!(
+        "{label:<30} free flight {:>7.0} ns ({q:.2} queries, {g:.2} segments, {c:.2} tentative; {:.0} ns/segment, {:.0} ns/tentative), violations {}",
+        flight_time / rays.len() as f64 * 1e9,
+        flight_time / flights.segments.max(1) as f64 * 1e9,
+        flight_time / flights.tentative_collisions.max(1) as f64 * 1e9,
+        flights.majorant_violations
+    );
+    let (q, g, c) = per(&shadows, collisions.len().max(1));
+    println!(
+        "{:<30} shadow ray  {:>7.0} ns ({q:.2} queries, {g:.2} segments, {c:.2} tentative), violations {}",
+        "",
+        shadow_time / collisions.len().max(1) as f64 * 1e9,
+        shadows.majorant_violations
+    );
+}
+
+fn tracking_benchmarks() {
+    const RAYS: usize = 20_000;
+    let mut rng = Pcg32::new(3, 3);
+    let mut medium = |sigma: f64, params: &[(&str, &str)]| {
+        let mut p = ParamSet::new();
+        p.set_float("sigma", sigma).set_string("material", "Au");
+        for (name, value) in params {
+            match value.parse::<f64>() {
+                Ok(x) => p.set_float(name, x),
+                Err(_) => p.set_string(name, value),
+            };
+        }
+        medium_from_params(&p).unwrap()
+    };
+    // The anchor sphere: radius 1, sigma 1e-3, Beckmann 0.3.
+    let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
+    let points: Vec<(DVec3, DVec3)> = (0..RAYS).map(|_| {
+        let n = uniform_direction(&mut rng);
+        (n, n)
+    }).collect();
+    bench_tracking("sphere, sigma 1e-3 (thin)", &medium(1e-3, &[("distribution", "beckmann"), ("alpha", "0.3")]), &sphere, &points, 0.0);
+    // The default scene's torus (64 x 24, R 0.5, r 0.2) at its three sigmas; rays start up to one
+    // enclosure cell (1/128 of the extent, times sqrt 3) above the shell, as in mfrender.
+    let t = meshes::torus(0.5, 0.2, 64, 24);
+    let torus = TriangleMesh::new(&t.positions, &t.indices, t.normals.as_deref(), None).unwrap();
+    let points: Vec<(DVec3, DVec3)> = (0..RAYS)
+        .map(|_| {
+            let (phi, theta) = (2.0 * std::f64::consts::PI * rng.next_f64(), 2.0 * std::f64::consts::PI * rng.next_f64());
+            let n = DVec3::new(theta.cos() * phi.cos(), theta.cos() * phi.sin(), theta.sin());
+            let p = DVec3::new(0.5 * phi.cos(), 0.5 * phi.sin(), 0.0) + 0.2 * n;
+            let q = torus.point(p).unwrap();
+            (p - q.f * q.normal, q.normal)
+        })
+        .collect();
+    let gap = 1.4 / 128.0 * 3f64.sqrt();
+    for (label, sigma, params) in [
+        ("torus, sigma 0.002 (thin)", 0.002, vec![("alpha_u", "0.12"), ("alpha_v", "0.12"), ("alpha_z", "0")]),
+        ("torus, sigma 0.02 (in-between)", 0.02, vec![("alpha_u", "0.4"), ("alpha_v", "0.4"), ("alpha_z", "0.2")]),
+        ("torus, sigma 0.05 (volume-like)", 0.05, vec![("alpha", "1")]),
+    ] {
+        bench_tracking(label, &medium(sigma, &params), &torus, &points, gap);
+    }
+}
+
+#[allow(dead_code)]
+fn bench_closest() {
+    let t = meshes::torus(0.5, 0.2, 64, 24);
+    let torus = TriangleMesh::new(&t.positions, &t.indices, t.normals.as_deref(), None).unwrap();
+    let mut rng = Pcg32::new(4, 4);
+    let pts: Vec<DVec3> = (0..N)
+        .map(|_| {
+            let (phi, theta) = (2.0 * std::f64::consts::PI * rng.next_f64(), 2.0 * std::f64::consts::PI * rng.next_f64());
+            let n = DVec3::new(theta.cos() * phi.cos(), theta.cos() * phi.sin(), theta.sin());
+            DVec3::new(0.5 * phi.cos(), 0.5 * phi.sin(), 0.0) + (0.2 + 0.01 * (rng.next_f64() - 0.5)) * n
+        })
+        .collect();
+    time("torus mesh: point(p) near the surface", |i| torus.point(pts[i]).unwrap().f);
 }

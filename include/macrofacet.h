@@ -43,6 +43,23 @@
 #define MF_PHASE_SAMPLE_DIMENSIONS 5
 
 /**
+ * [`mf_surface_callbacks::shape`]: no known curvature; without a bound callback the tracker
+ * uses the Lipschitz bound `|f(p + s d) − f(p)| <= s` (correct, slower).
+ */
+#define MF_SURFACE_GENERAL 0
+
+/**
+ * `f` is convex along every line (a convex solid with outward normals, e.g. a sphere or box),
+ * and `normal` is its gradient: bounds come from the segment's two end points.
+ */
+#define MF_SURFACE_CONVEX 1
+
+/**
+ * `f` is concave along every line (a convex solid with inward normals), `normal = ∇f`.
+ */
+#define MF_SURFACE_CONCAVE 2
+
+/**
  * The result of every call. `MF_OK` is zero; errors occupy 7100–7199.
  */
 typedef enum mf_status {
@@ -76,10 +93,24 @@ typedef enum mf_status {
    */
   MF_ERROR_INVALID_UTF8 = 7107,
   /**
+   * A host callback returned a non-zero code; the message gives it.
+   */
+  MF_ERROR_CALLBACK = 7108,
+  /**
    * An internal error (a caught panic): please report it.
    */
   MF_ERROR_INTERNAL = 7199,
 } mf_status;
+
+/**
+ * A closed triangle mesh enclosing the region `f < level` of a surface (e.g. the level
+ * `mf_medium_shell_top` of a medium): the boundary a host gives its ray tracer so that rays find
+ * the medium without marching the signed distance. Conservative (the whole region is inside),
+ * watertight, outward-facing, within one cell diagonal of the level set; made of grid cells of
+ * about `cell_size` (0: 1/128 of the surface's largest extent; at most 512 cells along an axis).
+ * Needs a surface with a finite bounding box.
+ */
+typedef struct mf_enclosure mf_enclosure;
 
 /**
  * An immutable GPIS configuration; safe to share between threads.
@@ -96,6 +127,12 @@ typedef struct mf_medium mf_medium;
  * Setting a name again replaces its value. Not thread-safe: one thread at a time.
  */
 typedef struct mf_params mf_params;
+
+/**
+ * A mean surface. Immutable and safe to share between threads (the callbacks of a callback
+ * surface must then be thread-safe, or be given per-thread `user_data`).
+ */
+typedef struct mf_surface mf_surface;
 
 /**
  * A 3-vector of doubles.
@@ -192,6 +229,14 @@ typedef struct mf_free_flight {
 } mf_free_flight;
 
 /**
+ * The phase function's value and sampling density for one pair of directions.
+ */
+typedef struct mf_phase_value {
+  struct mf_rgb value;
+  double pdf;
+} mf_phase_value;
+
+/**
  * One free-flight or transmittance query of a batch: the segment starts where the signed
  * distance is `f`, runs along the unit propagation direction `d` for `t_max` (may be +inf);
  * `u` in [0, 1) drives sampling (ignored by transmittance).
@@ -214,14 +259,6 @@ typedef struct mf_phase_query {
 } mf_phase_query;
 
 /**
- * The phase function's value and sampling density for one pair of directions.
- */
-typedef struct mf_phase_value {
-  struct mf_rgb value;
-  double pdf;
-} mf_phase_value;
-
-/**
  * One phase-function sample of a batch.
  */
 typedef struct mf_phase_sample_query {
@@ -229,6 +266,162 @@ typedef struct mf_phase_sample_query {
   struct mf_vec3 wi;
   double u[MF_PHASE_SAMPLE_DIMENSIONS];
 } mf_phase_sample_query;
+
+/**
+ * The mean surface at a point.
+ */
+typedef struct mf_surface_point {
+  /**
+   * Signed distance to the mean surface (scene units; `> 0` outside).
+   */
+  double f;
+  /**
+   * Unit normal of the local frame.
+   */
+  struct mf_vec3 normal;
+  /**
+   * Direction of `alpha_u` (made orthogonal to `normal` by the library).
+   */
+  struct mf_vec3 tangent;
+} mf_surface_point;
+
+/**
+ * The host's mean surface at `p` (world space): writes `*out` and returns 0, or returns any
+ * non-zero code to report a failure (the tracking call then fails with `MF_ERROR_CALLBACK`).
+ * Must not unwind.
+ */
+typedef int32_t (*mf_surface_point_fn)(void *user_data,
+                                       struct mf_vec3 p,
+                                       struct mf_surface_point *out);
+
+/**
+ * Conservative bounds along the segment `p + s d`, `s ∈ [0, length]`: `f` lies between the
+ * lines through `(0, f_lo[0])`, `(length, f_lo[1])` and through `(0, f_hi[0])`,
+ * `(length, f_hi[1])`; `d · normal` lies in `[cos_lo, cos_hi]`. `length` may be shorter than
+ * asked for. `f_lo` may be `-inf` and `f_hi` `+inf` (no bound on that side).
+ */
+typedef struct mf_segment_bound {
+  double length;
+  double f_lo[2];
+  double f_hi[2];
+  double cos_lo;
+  double cos_hi;
+} mf_segment_bound;
+
+/**
+ * The host's bound of the segment `p + s d`, `s ∈ [0, length]`, where `*start` is the surface
+ * at `p`: writes `*out` and returns 0, or a non-zero code on failure. The tracker prefers
+ * bounds with `f_hi − f_lo <= tolerance` and accepts a shorter `length`. Must not unwind.
+ */
+typedef int32_t (*mf_surface_bound_fn)(void *user_data,
+                                       const struct mf_surface_point *start,
+                                       struct mf_vec3 p,
+                                       struct mf_vec3 d,
+                                       double length,
+                                       double tolerance,
+                                       struct mf_segment_bound *out);
+
+/**
+ * A mean surface implemented by the host.
+ */
+typedef struct mf_surface_callbacks {
+  /**
+   * Required.
+   */
+  mf_surface_point_fn point;
+  /**
+   * Optional (NULL: bounds from `shape`).
+   */
+  mf_surface_bound_fn bound;
+  /**
+   * `MF_SURFACE_GENERAL`, `MF_SURFACE_CONVEX` or `MF_SURFACE_CONCAVE`; used without `bound`.
+   */
+  uint32_t shape;
+  /**
+   * A box containing the mean surface and its interior (`f <= 0`); infinite components for
+   * an unbounded interior. The tracker clips rays to it grown by the shell's top.
+   */
+  struct mf_vec3 bounds_min;
+  struct mf_vec3 bounds_max;
+} mf_surface_callbacks;
+
+/**
+ * A triangle mesh for [`mf_surface_new_mesh`], in world space. Triangles are counter-clockwise
+ * seen from outside (normals point out); the mesh should be closed for the interior to be
+ * well defined.
+ */
+typedef struct mf_mesh {
+  /**
+   * `3 * vertex_count` doubles.
+   */
+  const double *positions;
+  size_t vertex_count;
+  /**
+   * `3 * triangle_count` vertex indices.
+   */
+  const uint32_t *indices;
+  size_t triangle_count;
+  /**
+   * NULL, or `3 * vertex_count` doubles: unit vertex normals (the frame normal is then their
+   * interpolation at the closest point, as Mitsuba 3 shades meshes).
+   */
+  const double *normals;
+  /**
+   * NULL, or `2 * vertex_count` doubles: texture coordinates (the tangent is then `dp/du`).
+   */
+  const double *uvs;
+} mf_mesh;
+
+/**
+ * One tracking query: the ray `origin + t d` (`d` unit, world space), `t ∈ [0, t_max]`
+ * (`t_max` may be `+inf`), inside the medium's region; `seed` drives the call's random numbers.
+ */
+typedef struct mf_track_query {
+  struct mf_vec3 origin;
+  struct mf_vec3 d;
+  double t_max;
+  uint64_t seed;
+} mf_track_query;
+
+/**
+ * What one tracking call cost: surface queries (callbacks), tracked segments (bound queries),
+ * tentative collisions, and majorant violations — tentative collisions where the true
+ * extinction exceeded the majorant because the surface's bounds were wrong (0 for a correct
+ * surface; a non-zero count means a biased result).
+ */
+typedef struct mf_track_stats {
+  uint32_t surface_queries;
+  uint32_t segments;
+  uint32_t tentative_collisions;
+  uint32_t majorant_violations;
+} mf_track_stats;
+
+/**
+ * The outcome of [`mf_track_free_flight`]. When `scattered`, a real collision happened at
+ * `t` (`0 <= t <= t_max`), at `p` where the signed distance is `f` and the local frame of the
+ * phase function is `frame`; otherwise the ray passed the segment (the other fields are zero and
+ * `t = t_max`). The weight of either outcome is 1: the flakes' albedo is in the phase function.
+ */
+typedef struct mf_collision {
+  bool scattered;
+  double t;
+  struct mf_vec3 p;
+  double f;
+  struct mf_frame frame;
+  struct mf_track_stats stats;
+} mf_collision;
+
+/**
+ * The outcome of [`mf_track_transmittance`]: an unbiased estimate in `[0, 1]`.
+ */
+typedef struct mf_transmittance {
+  double transmittance;
+  struct mf_track_stats stats;
+} mf_transmittance;
+
+
+
+
 
 #ifdef __cplusplus
 extern "C" {
@@ -424,6 +617,20 @@ enum mf_status mf_phase_eval(const struct mf_medium *medium,
                              struct mf_rgb *out_value);
 
 /**
+ * The phase function's value and the density of [`mf_phase_sample`] for one pair of
+ * directions in one call (what next-event estimation with MIS needs; for diffuse flakes it
+ * runs their quadrature once instead of twice).
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_phase_eval_pdf(const struct mf_medium *medium,
+                                 const struct mf_frame *frame_,
+                                 struct mf_vec3 wi,
+                                 struct mf_vec3 wo,
+                                 struct mf_phase_value *out_value);
+
+/**
  * The density with which [`mf_phase_sample`] picks `wo` (per solid angle).
  *
  * # Safety
@@ -533,6 +740,158 @@ enum mf_status mf_params_set_rgb(struct mf_params *params, const char *name, con
  * `params` must be a live handle; `name` and `value` NUL-terminated strings.
  */
 enum mf_status mf_params_set_string(struct mf_params *params, const char *name, const char *value);
+
+/**
+ * Creates a host-implemented surface (see [`mf_surface_callbacks`]).
+ *
+ * # Safety
+ * `callbacks` must be NULL or valid; `out_surface` NULL or valid for writes.
+ */
+enum mf_status mf_surface_new_callbacks(const struct mf_surface_callbacks *callbacks,
+                                        struct mf_surface **out_surface);
+
+/**
+ * Creates a sphere: `f = |p − center| − radius` (negated when `flip_normals`, which makes the
+ * outside the interior), frame normal `∇f`, tangent `pole × (p − center)` — Mitsuba 3's `dp/du`
+ * when `pole` is the sphere's object-space `+z` axis in world space.
+ *
+ * # Safety
+ * `out_surface` must be NULL or valid for writes.
+ */
+enum mf_status mf_surface_new_sphere(struct mf_vec3 center,
+                                     double radius,
+                                     bool flip_normals,
+                                     struct mf_vec3 pole,
+                                     struct mf_surface **out_surface);
+
+/**
+ * Creates a triangle-mesh surface (exact signed distance, see [`mf_mesh`]). The arrays are
+ * copied; the caller may free them after the call.
+ *
+ * # Safety
+ * `mesh` must be NULL or valid, its arrays valid for the sizes it states.
+ */
+enum mf_status mf_surface_new_mesh(const struct mf_mesh *mesh, struct mf_surface **out_surface);
+
+/**
+ * Releases a surface; NULL is a no-op.
+ *
+ * # Safety
+ * `surface` must be NULL or a pointer from an `mf_surface_new_*` function, not yet freed and not
+ * in use by another thread.
+ */
+void mf_surface_free(struct mf_surface *surface);
+
+/**
+ * The surface at `p`: its signed distance, frame normal and tangent (`user_data` goes to the
+ * callbacks of a callback surface). Hosts use it for queries of their own, e.g. the mean of a
+ * GPIS realization.
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_surface_eval(const struct mf_surface *surface,
+                               void *user_data,
+                               struct mf_vec3 p,
+                               struct mf_surface_point *out_point);
+
+/**
+ * The surface's bounding box (of the mean surface and its interior; infinite components when
+ * unbounded).
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_surface_bounding_box(const struct mf_surface *surface,
+                                       struct mf_vec3 *out_min,
+                                       struct mf_vec3 *out_max);
+
+/**
+ * Builds the enclosure of `f < level` (see [`mf_enclosure`]); `user_data` goes to the callbacks
+ * of a callback surface. Read it with [`mf_enclosure_mesh`], release it with
+ * [`mf_enclosure_free`].
+ *
+ * # Safety
+ * Pointers must be NULL or valid; the callbacks must be safe to call with `user_data`.
+ */
+enum mf_status mf_surface_enclosure(const struct mf_surface *surface,
+                                    void *user_data,
+                                    double level,
+                                    double cell_size,
+                                    struct mf_enclosure **out_enclosure);
+
+/**
+ * The enclosure's triangles as an [`mf_mesh`] (no normals or uvs) whose arrays belong to the
+ * enclosure and stay valid until [`mf_enclosure_free`].
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_enclosure_mesh(const struct mf_enclosure *enclosure, struct mf_mesh *out_mesh);
+
+/**
+ * Releases an enclosure; NULL is a no-op.
+ *
+ * # Safety
+ * `enclosure` must be NULL or from [`mf_surface_enclosure`], not yet freed.
+ */
+void mf_enclosure_free(struct mf_enclosure *enclosure);
+
+/**
+ * Samples a free flight along `query`'s ray through the medium around `surface`: the distance
+ * to the next real collision, with its local frame (for `mf_phase_*`). Delta tracking against
+ * majorants built from the planar closed forms and the surface's segment bounds: exact (every
+ * tentative collision real) for a planar surface, unbiased for any surface whose bounds hold.
+ * `user_data` is passed to the surface's callbacks. Errors: invalid arguments, a callback's
+ * failure or invalid answer (NaN, non-unit normal, inconsistent bound) — reported at once.
+ *
+ * # Safety
+ * Pointers must be NULL or valid; the callbacks must be safe to call with `user_data`.
+ */
+enum mf_status mf_track_free_flight(const struct mf_medium *medium,
+                                    const struct mf_surface *surface,
+                                    void *user_data,
+                                    const struct mf_track_query *query,
+                                    struct mf_collision *out_collision);
+
+/**
+ * An unbiased estimate of the transmittance along `query`'s ray (shadow rays): residual ratio
+ * tracking with an analytic control, so a thin shell's shadow ray rarely needs a surface query.
+ *
+ * # Safety
+ * As [`mf_track_free_flight`].
+ */
+enum mf_status mf_track_transmittance(const struct mf_medium *medium,
+                                      const struct mf_surface *surface,
+                                      void *user_data,
+                                      const struct mf_track_query *query,
+                                      struct mf_transmittance *out_transmittance);
+
+/**
+ * Batch form of [`mf_track_free_flight`] for wavefront renderers (one `user_data` for all).
+ *
+ * # Safety
+ * `queries` and `out_collisions` must hold `count` elements (may be NULL when `count` is 0).
+ */
+enum mf_status mf_track_free_flight_batch(const struct mf_medium *medium,
+                                          const struct mf_surface *surface,
+                                          void *user_data,
+                                          const struct mf_track_query *queries,
+                                          size_t count,
+                                          struct mf_collision *out_collisions);
+
+/**
+ * Batch form of [`mf_track_transmittance`].
+ *
+ * # Safety
+ * `queries` and `out_transmittances` must hold `count` elements (may be NULL when `count` is 0).
+ */
+enum mf_status mf_track_transmittance_batch(const struct mf_medium *medium,
+                                            const struct mf_surface *surface,
+                                            void *user_data,
+                                            const struct mf_track_query *queries,
+                                            size_t count,
+                                            struct mf_transmittance *out_transmittances);
 
 #ifdef __cplusplus
 }  // extern "C"

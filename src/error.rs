@@ -18,6 +18,8 @@ pub enum ErrorKind {
     /// A query argument (direction, signed distance, random number) is NaN, infinite or
     /// not normalised.
     InvalidArgument,
+    /// A host callback (e.g. a mean surface's) reported a failure.
+    Callback,
 }
 
 /// An error with a message that names the parameter or argument at fault.

@@ -100,7 +100,41 @@ impl HeightProfile {
     /// analytically (`ln Φ(f/σ) = ln Φ(f_s/σ) + k · target`), then polishes with Newton steps
     /// safeguarded by a bracket, which keeps nearly parallel segments accurate.
     pub fn invert_density_integral(&self, f0: f64, slope: f64, t_max: f64, target: f64) -> Option<f64> {
-        if !(t_max > 0.0) || !(target < self.density_integral(f0, slope, t_max)) {
+        if !(t_max > 0.0) {
+            return None;
+        }
+        if slope != 0.0 {
+            // The closed form: with both ends' ln Φ computed once, the total decides passing and
+            // the inverse is exact unless the segment is nearly parallel (then polished below).
+            let top = self.top();
+            let f_start = f0.min(top);
+            let f_end = if t_max == f64::INFINITY { slope.signum() * f64::INFINITY } else { f0 + slope * t_max };
+            if f0 > top && f_end > top {
+                return None;
+            }
+            if (f_end.min(top) - f_start).abs() > SMALL_DELTA * self.sigma {
+                let ln_start = self.ln_cdf(f_start);
+                let total = if f_end == f64::NEG_INFINITY { f64::INFINITY } else { ((self.ln_cdf(f_end) - ln_start) / slope).max(0.0) };
+                if !(target < total) {
+                    return None;
+                }
+                let f = self.sigma * probit_of_ln(ln_start + slope * target);
+                if (f - f_start).abs() > SMALL_DELTA * self.sigma {
+                    let t_start = if f0 > top { (f0 - top) / -slope } else { 0.0 };
+                    let t = t_start + (f - f_start) / slope;
+                    if t.is_finite() {
+                        return Some(t.clamp(t_start, t_max));
+                    }
+                }
+            }
+        }
+        self.polished_inverse(f0, slope, t_max, target)
+    }
+
+    /// [`Self::invert_density_integral`] for nearly parallel segments: the analytic guess
+    /// polished by Newton steps on `∫ρ − target`, safeguarded by a bracket.
+    fn polished_inverse(&self, f0: f64, slope: f64, t_max: f64, target: f64) -> Option<f64> {
+        if !(target < self.density_integral(f0, slope, t_max)) {
             return None;
         }
         let top = self.top();

@@ -102,6 +102,18 @@ impl MacrofacetPhase {
         }
     }
 
+    /// [`Self::eval`] and [`Self::pdf`] together: for diffuse flakes both are the same
+    /// quadrature, computed once (Mitsuba 3's `eval_pdf`).
+    pub fn eval_pdf(&self, wi: DVec3, wo: DVec3) -> (Rgb, f64) {
+        match self.micro_bsdf {
+            MicroBsdf::Diffuse { reflectance } => {
+                let p = self.diffuse_lobe_integral(wi, wo);
+                (reflectance.map(|r| r * p), p)
+            }
+            _ => (self.eval(wi, wo), self.pdf(wi, wo)),
+        }
+    }
+
     /// Density of [`Self::sample`] per solid angle of `wo`.
     pub fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
         match self.micro_bsdf {

@@ -78,7 +78,10 @@ const MAX_SHORTENINGS: u32 = 4;
 const MAX_SKIPS: u32 = 16;
 /// Default reach of a segment, in σ of change of `f` (covers the shell from its top to deep
 /// below the mean surface, where a collision is nearly certain).
-const SEGMENT_SIGMAS: f64 = 8.0;
+const SEGMENT_SIGMAS: f64 = 4.0;
+/// Above `top + SKIP_SIGMAS σ` the tracker steps by the Lipschitz bound instead of bounding a
+/// segment: cheaper for surfaces whose bounds cost more than a point query.
+const SKIP_SIGMAS: f64 = 2.0;
 /// Ratio tracking: below this estimate, continue by Russian roulette (unbiased; ends walks into
 /// the opaque interior).
 const ROULETTE_THRESHOLD: f64 = 0.1;
@@ -101,20 +104,38 @@ impl ProjectedAreaBounds {
         ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz() }
     }
 
-    /// `(S_up, S_lo)` with `S_lo <= σ(d_local) <= S_up` for every frame whose normal has
-    /// `d·n ∈ [c_lo, c_hi]`, any tangent. `σ(d) = projected_area(−d_local)` sees `w_z = −d·n`;
-    /// over the angle interval the maximum of an L-Lipschitz function is at most the larger end
-    /// value plus `L × width / 2` (and the minimum at least the smaller minus as much).
-    fn range(&self, cos: [f64; 2]) -> (f64, f64) {
-        let area = |ndf: &Ndf, c: f64| ndf.projected_area(DVec3::new((1.0 - c * c).max(0.0).sqrt(), 0.0, -c));
-        let (c_lo, c_hi) = (cos[0].clamp(-1.0, 1.0), cos[1].clamp(-1.0, 1.0));
-        let width = c_hi.acos() - c_lo.acos(); // acos decreases: θ(c_lo) >= θ(c_hi)
-        let slack = 0.5 * self.lipschitz * width.abs();
-        let upper = area(&self.upper, c_lo).max(area(&self.upper, c_hi)) + slack;
-        let lower = (area(&self.lower, c_lo).min(area(&self.lower, c_hi)) - slack).max(0.0);
-        (upper, lower)
+    /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent.
+    /// `σ(d) = projected_area(−d_local)` sees `w_z = −d·n`; over the angle interval an
+    /// L-Lipschitz function exceeds neither the larger end value by more than `L × width / 2`
+    /// nor the midpoint value by more than that (one evaluation for narrow ranges).
+    fn upper(&self, cos: [f64; 2]) -> f64 {
+        self.bound(&self.upper, cos, 1.0)
+    }
+
+    /// `S_lo <= σ(d_local)` over the same frames (at least 0).
+    fn lower(&self, cos: [f64; 2]) -> f64 {
+        self.bound(&self.lower, cos, -1.0).max(0.0)
+    }
+
+    fn bound(&self, ndf: &Ndf, cos: [f64; 2], side: f64) -> f64 {
+        let area = |theta: f64| {
+            let (sin, cos) = theta.sin_cos();
+            ndf.projected_area(DVec3::new(sin, 0.0, -cos))
+        };
+        let (theta_lo, theta_hi) = (cos[1].clamp(-1.0, 1.0).acos(), cos[0].clamp(-1.0, 1.0).acos());
+        let width = theta_hi - theta_lo;
+        if width < NARROW_RANGE {
+            return area(0.5 * (theta_lo + theta_hi)) + side * 0.5 * self.lipschitz * width;
+        }
+        let (a, b) = (area(theta_lo), area(theta_hi));
+        let end = if side > 0.0 { a.max(b) } else { a.min(b) };
+        end + side * 0.5 * self.lipschitz * width
     }
 }
+
+/// Below this width (radians) a range of directions is bounded from its midpoint: at most a
+/// `lipschitz × width / 2` loss, a few percent, for half the evaluations.
+const NARROW_RANGE: f64 = 0.05;
 
 /// Tracking of one medium around one mean surface.
 pub struct Tracker<'a, S: MeanSurface> {
@@ -217,7 +238,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
     fn skip_above(&self, mut t: f64, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
         let (sigma, top) = (self.height().sigma, self.height().top());
         for _ in 0..MAX_SKIPS {
-            if !(start.f > top + SEGMENT_SIGMAS * sigma) || !(t < t_exit) {
+            if !(start.f > top + SKIP_SIGMAS * sigma) || !(t < t_exit) {
                 break;
             }
             t += start.f - top;
@@ -239,7 +260,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
         let mut shortenings = 0;
         loop {
             stats.segments += 1;
-            let mut bound = self.surface.bound(start, p, d, length, cache)?;
+            let mut bound = self.surface.bound(start, p, d, length, LOOSENESS_SIGMAS * sigma, cache)?;
             bound.validate(length, start.f, "the mean surface")?;
             // A side without a bound gets the Lipschitz bound every signed distance has.
             let lipschitz = SegmentBound::lipschitz(start.f, bound.length);
@@ -249,20 +270,24 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
             if bound.f_hi.iter().any(|v| v.is_infinite()) {
                 bound.f_hi = lipschitz.f_hi;
             }
-            let loose = (bound.f_hi[0] - bound.f_lo[0]).max(bound.f_hi[1] - bound.f_lo[1]) > LOOSENESS_SIGMAS * sigma;
-            if loose && shortenings < MAX_SHORTENINGS && bound.length > 2.0 * sigma {
+            // How far below f the lower bound falls at the ends (what costs tentative collisions),
+            // against the end point's f when the surface gave it, else the upper bound.
+            let f_end = bound.end.map_or(bound.f_hi[1], |e| e.f);
+            let loose = (start.f - bound.f_lo[0]).max(f_end - bound.f_lo[1]) > LOOSENESS_SIGMAS * sigma;
+            // A surface that shortened the segment itself has already weighed cost and tightness.
+            if loose && shortenings < MAX_SHORTENINGS && bound.length == length && bound.length > 2.0 * sigma {
                 shortenings += 1;
                 length = 0.5 * bound.length;
                 continue;
             }
-            let (s_up, s_lo) = self.area.range(bound.cos);
-            return Ok(Segment { t, bound, s_up, s_lo, shortened: shortenings > 0 });
+            // The control's S_lo is only needed by transmittance; it sets it.
+            return Ok(Segment { t, bound, s_up: self.area.upper(bound.cos), s_lo: 0.0, shortened: shortenings > 0 });
         }
     }
 
     /// True when the segment's majorant is zero throughout: it lies above the shell.
     fn is_empty(&self, seg: &Segment) -> bool {
-        seg.s_up == 0.0 || self.height().density(seg.bound.f_lo[0].min(seg.bound.f_lo[1])) == 0.0
+        seg.s_up == 0.0 || seg.bound.f_lo[0].min(seg.bound.f_lo[1]) > self.height().top()
     }
 
     /// The majorant `μ(s)` of a segment at `s`.
@@ -359,7 +384,8 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
             if !(t < t_exit) {
                 return Ok(transmittance);
             }
-            let seg = self.next_segment(t, &start, origin, d, t_exit - t, previous, &mut cache, stats)?;
+            let mut seg = self.next_segment(t, &start, origin, d, t_exit - t, previous, &mut cache, stats)?;
+            seg.s_lo = self.area.lower(seg.bound.cos);
             // The control's optical depth, in closed form.
             let (h0, h_slope) = seg.bound.upper_line();
             if seg.s_lo > 0.0 {

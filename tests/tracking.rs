@@ -379,7 +379,7 @@ fn mesh_distance_matches_brute_force_and_bounds_hold() {
             for s in [&surface, &flat] {
                 let start = s.point(p).unwrap();
                 let length = 0.3 * rng.next_f64() + 1e-3;
-                let b = s.bound(&start, p, d, length, &mut cache).unwrap();
+                let b = s.bound(&start, p, d, length, 0.01, &mut cache).unwrap();
                 b.validate(length, start.f, name).unwrap();
                 let (lo0, lo_k) = b.lower_line();
                 let (hi0, hi_k) = b.upper_line();
@@ -395,5 +395,59 @@ fn mesh_distance_matches_brute_force_and_bounds_hold() {
                 }
             }
         }
+    }
+}
+
+/// Crossings of the ray `o + t d`, `t > 0`, with a triangle mesh (Möller–Trumbore).
+fn crossings(positions: &[DVec3], triangles: &[[u32; 3]], o: DVec3, d: DVec3) -> usize {
+    triangles
+        .iter()
+        .filter(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            let (e1, e2) = (b - a, c - a);
+            let pv = d.cross(e2);
+            let det = e1.dot(pv);
+            if det.abs() < 1e-14 {
+                return false;
+            }
+            let tv = o - a;
+            let u = tv.dot(pv) / det;
+            let qv = tv.cross(e1);
+            let v = d.dot(qv) / det;
+            u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(qv) / det > 0.0
+        })
+        .count()
+}
+
+#[test]
+fn enclosure_contains_the_region() {
+    // Every point with f < level lies inside the enclosure (odd crossing count along a random
+    // direction), for a sphere, a smooth torus mesh and a sharp cube, thin and thick levels.
+    let torus = mesh_surface(&meshes::torus(1.0, 0.4, 32, 16));
+    let cube = mesh_surface(&meshes::cube());
+    let sphere = Sphere::new(DVec3::new(0.2, 0.0, -0.1), 0.8, false, DVec3::Z).unwrap();
+    fn check<S: MeanSurface>(name: &str, s: &S, level: f64, seed: u64) {
+        let start = std::time::Instant::now();
+        let e = macrofacet::surface::enclosure(s, level, 0.0).unwrap();
+        let built = start.elapsed().as_secs_f64();
+        let b = s.bounding_box().grown(level + 2.0 * e.cell);
+        let mut rng = Pcg32::new(seed, 0);
+        let mut inside = 0;
+        for _ in 0..1000 {
+            let p = b.min + (b.max - b.min) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            let f = s.point(p).unwrap().f;
+            if f < level {
+                inside += 1;
+                // Directions with irrational-ish components avoid edges of the axis-aligned faces.
+                let d = DVec3::new(0.5377, 0.8131, 0.2231).normalize();
+                assert_eq!(crossings(&e.positions, &e.triangles, p, d) % 2, 1, "{name}: point {p} with f = {f} < {level} is outside the enclosure");
+            }
+        }
+        println!("{name}, level {level}: {} triangles, cell {:.4}, built in {built:.2} s, {inside} region points inside", e.triangles.len(), e.cell);
+    }
+    for level in [0.003, 0.15] {
+        check("torus", &torus, level, 1);
+        check("cube", &cube, level, 2);
+        check("sphere", &sphere, level, 3);
     }
 }

@@ -135,8 +135,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 const PhaseFunction& ph = medium->phase();
                 Vec3 wo = -ray.d;
                 L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {
-                    *pdf = ph.pdf(mi, wo, wi);
-                    return ph.eval(mi, wo, wi);
+                    return ph.eval_pdf(mi, wo, wi, pdf);
                 });
                 Vec3 wi;
                 float pdf;

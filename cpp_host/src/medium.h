@@ -3,21 +3,10 @@
 // The integrator is medium-agnostic: it tracks which Medium the current ray segment is in
 // (through the interior/exterior references of the shapes it crosses) and asks that Medium to
 // sample a free flight or a transmittance along [0, t_max] of the segment, where t_max is the
-// distance to the next surface. How the medium does it (analytic, delta/ratio tracking against a
-// majorant, ...) is its own business, so phase 2's macrofacet medium plugs in here:
-//
-//   * its region is "interior of a shape plus the shell out to f = +k·sigma": the host will
-//     register a boundary surface (null BSDF) at that level set, with interior = the macrofacet
-//     medium, instead of the mean surface itself (see Shape::sdf and scene_builder.cpp's hook);
-//   * inside, sigma_t depends on the signed distance f(p) and on the direction relative to
-//     grad f(p): the medium keeps a pointer to its Shape and calls shape->sdf(p) (SdfSample
-//     {f, grad}) at tentative collisions, with a majorant over the segment from the SDF bound
-//     |f(p + t d) − f(p)| <= t (1-Lipschitz), i.e. f_min = f(o) − t_max;
-//   * the phase function may depend on the local frame: MediumInteraction carries `frame_n`
-//     (set by the medium, e.g. to grad f) and PhaseFunction gets the interaction.
-//
-// Phase 2: create_macrofacet_medium() (medium_macrofacet.cpp) builds the macrofacet medium
-// through the library's C ABI; see medium_macrofacet.h.
+// distance to the next surface. How the medium does it is its own business: the homogeneous
+// medium samples exponentials, the macrofacet medium hands the segment to the library's tracker
+// (medium_macrofacet.h), which returns the collision with its local frame (MediumInteraction's
+// frame_n / frame_t) for the phase function.
 #pragma once
 
 #include <memory>
@@ -52,6 +41,11 @@ public:
     /// wo points back along the incoming ray, wi is the new direction.
     virtual Rgb eval(const MediumInteraction& mi, const Vec3& wo, const Vec3& wi) const = 0;
     virtual float pdf(const MediumInteraction& mi, const Vec3& wo, const Vec3& wi) const = 0;
+    /// eval() and pdf() together (what NEE with MIS needs); override when both share work.
+    virtual Rgb eval_pdf(const MediumInteraction& mi, const Vec3& wo, const Vec3& wi, float* pdf_out) const {
+        *pdf_out = pdf(mi, wo, wi);
+        return eval(mi, wo, wi);
+    }
     /// Sample wi; *weight = eval / pdf. Draws its uniforms from `sampler` (isotropic and HG take
     /// two, the macrofacet phase MF_PHASE_SAMPLE_DIMENSIONS).
     virtual bool sample(const MediumInteraction& mi, const Vec3& wo, Sampler& sampler, Vec3* wi, float* pdf,
@@ -124,8 +118,8 @@ private:
     std::shared_ptr<PhaseFunction> phase_;
 };
 
-/// A parameter of a plugin that mfrender does not interpret itself (macrofacet media): kept
-/// verbatim so it can be handed to the Rust library's mf_params_* C API in phase 2.
+/// A parameter of a plugin that mfrender does not interpret itself (macrofacet and gpis media):
+/// kept verbatim so it can be handed to the library's mf_params_* C API.
 struct ParamValue {
     enum class Kind { Float, Rgb, String, Int, Bool } kind = Kind::Float;
     double f = 0;
@@ -147,10 +141,5 @@ struct MediumParamBag {
         return nullptr;
     }
 };
-
-/// THE phase-2 hook: build the macrofacet medium of `shape` (its mean surface) from its
-/// parameter bag through mf_params_* / mf_medium_new. Returns a MacrofacetMedium; throws
-/// mf::Error at the file:line of the offending parameter when the library rejects the bag.
-std::shared_ptr<Medium> create_macrofacet_medium(const MediumParamBag& bag, const std::shared_ptr<const Shape>& shape);
 
 }  // namespace mf

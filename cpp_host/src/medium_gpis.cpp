@@ -5,20 +5,21 @@
 #include <exception>
 #include <limits>
 
+#include "mean_surface.h"
 #include "medium_macrofacet.h"
 
 namespace mf {
 namespace {
 
-/// mf_sdf_fn over a Shape: its SDF and gradient (world space). Must not unwind: an exception is
-/// reported as NaN, which makes the trace fail with a status (turned into an mf::Error).
-extern "C" void shape_sdf_callback(void* user_data, mf_vec3 p, mf_sdf_sample* out) {
-    const Shape* shape = static_cast<const Shape*>(user_data);
-    try {
-        SdfSample s = shape->sdf(Vec3(float(p.x), float(p.y), float(p.z)));
+/// mf_sdf_fn over the library's mean surface: its signed distance and frame normal (world
+/// space). A failure is reported as NaN, which makes the trace fail with a status.
+extern "C" void mean_sdf_callback(void* user_data, mf_vec3 p, mf_sdf_sample* out) {
+    const mf_surface* surface = static_cast<const mf_surface*>(user_data);
+    mf_surface_point s;
+    if (mf_surface_eval(surface, nullptr, p, &s) == MF_OK) {
         out->f = s.f;
-        out->gradient = mf_vec3{s.grad.x, s.grad.y, s.grad.z};
-    } catch (...) {
+        out->gradient = s.normal;
+    } else {
         out->f = std::numeric_limits<double>::quiet_NaN();
         out->gradient = mf_vec3{0, 0, 0};
     }
@@ -52,7 +53,7 @@ private:
 
 }  // namespace
 
-GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const Shape> mean, std::string label)
+GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label)
     : handle_(handle), mean_(std::move(mean)), label_(std::move(label)) {
     phase_ = std::make_shared<GpisPhase>(this);
     if (mf_gpis_envelope(handle_, &envelope_) != MF_OK || !(envelope_ > 0)) {
@@ -60,7 +61,6 @@ GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const Shape> mean, std::
         mf_gpis_free(handle_);
         throw Error(label_ + ": mf_gpis_envelope failed: " + msg);
     }
-    grid_ = make_sdf_bound_grid(mean_, envelope_);
 }
 
 GpisMedium::~GpisMedium() { mf_gpis_free(handle_); }
@@ -81,8 +81,8 @@ bool GpisMedium::trace(const Vec3& o, const Vec3& d, double t_max, const GpisSta
     }
     mf_gpis_hit h;
     const double tm = std::isfinite(t_max) ? t_max : std::numeric_limits<double>::infinity();
-    if (mf_gpis_trace(handle_, shape_sdf_callback, const_cast<Shape*>(mean_.get()), origin, unit_d(d), tm, &st, seed,
-                      &h) != MF_OK)
+    if (mf_gpis_trace(handle_, mean_sdf_callback, const_cast<mf_surface*>(mean_->handle()), origin, unit_d(d), tm, &st,
+                      seed, &h) != MF_OK)
         throw Error(label_ + ": mf_gpis_trace failed: " + mf_last_error());
     if (!h.hit) return false;
     hit->t = h.t;
@@ -123,7 +123,7 @@ Rgb GpisMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) con
     return trace(ray.o, ray.d, t_max, GpisStart(), sampler.next_u64(), &h) ? Rgb(0.0f) : Rgb(1.0f);
 }
 
-std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, const std::shared_ptr<const Shape>& shape) {
+std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean) {
     if (bag.type != "gpis") throw Error(bag.loc, "not a gpis medium");
     mf_params* params = bag_to_params(bag, nullptr);
     mf_gpis* handle = nullptr;
@@ -131,7 +131,7 @@ std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, const 
     std::string msg = st == MF_OK ? std::string() : mf_last_error();
     mf_params_free(params);
     if (st != MF_OK) throw medium_param_error(bag, msg);
-    return std::make_shared<GpisMedium>(handle, shape, medium_label(bag));
+    return std::make_shared<GpisMedium>(handle, std::move(mean), medium_label(bag));
 }
 
 }  // namespace mf

@@ -4,7 +4,8 @@
 // A shape whose interior is a gpis medium is the *mean surface* of a Gaussian-process implicit
 // surface; realizations live in the band |f| <= envelope (mf_gpis_envelope) around it. The
 // region f < +envelope is registered exactly like a macrofacet region (make_region_boundary:
-// the same null-BSDF level-set boundary), with this medium as its interior. The integrator
+// the same null-BSDF boundary), with this medium as its interior. The mean is the library's
+// signed distance of the shape (mean_surface.h), handed to mf_gpis_trace as its callback. The integrator
 // special-cases it (Medium::as_gpis): inside the region a path segment is realized by
 // mf_gpis_trace up to the next surface (the band's exit); a hit is a delta reflection
 // (mf_gpis_scatter), after which the next segment starts ON_SURFACE with the hit's sampled
@@ -22,7 +23,7 @@
 
 namespace mf {
 
-class SdfBoundGrid;
+class MeanSurface;
 
 /// One crossing of a realization (double precision: the next segment starts exactly there).
 struct GpisHit {
@@ -45,7 +46,7 @@ struct GpisStart {
 class GpisMedium final : public Medium {
 public:
     /// Takes ownership of `handle` (freed with mf_gpis_free in the destructor).
-    GpisMedium(mf_gpis* handle, std::shared_ptr<const Shape> mean, std::string label);
+    GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label);
     ~GpisMedium() override;
     GpisMedium(const GpisMedium&) = delete;
     GpisMedium& operator=(const GpisMedium&) = delete;
@@ -68,21 +69,19 @@ public:
     const GpisMedium* as_gpis() const override { return this; }
 
     double envelope() const { return envelope_; }
-    const Shape& mean_shape() const { return *mean_; }
-    const std::shared_ptr<const SdfBoundGrid>& grid() const { return grid_; }
+    const MeanSurface& mean_surface() const { return *mean_; }
     const mf_gpis* handle() const { return handle_; }
 
 private:
     mf_gpis* handle_;
-    std::shared_ptr<const Shape> mean_;
+    std::shared_ptr<const MeanSurface> mean_;
     std::shared_ptr<PhaseFunction> phase_;
-    std::shared_ptr<const SdfBoundGrid> grid_;
     double envelope_ = 0;
     std::string label_;
 };
 
 /// The gpis hook: parameter bag -> mf_params -> mf_gpis_new (same bag conversion and error
 /// locations as the macrofacet hook). Throws mf::Error at the offending parameter's line.
-std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, const std::shared_ptr<const Shape>& shape);
+std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean);
 
 }  // namespace mf

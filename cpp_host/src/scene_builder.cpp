@@ -6,6 +6,7 @@
 #include <map>
 
 #include "image_io.h"
+#include "mean_surface.h"
 #include "medium_gpis.h"
 #include "medium_macrofacet.h"
 
@@ -303,27 +304,12 @@ private:
             if (!(r > 0)) throw perr(o, "radius", "must be positive");
             double s = to_world.similarity_scale(1e-4);
             if (s < 0) throw perr(o, "to_world", "of a sphere must be a similarity (rotation, uniform scale, translation)");
-            shape = std::make_shared<SphereShape>(to_world.point(c), float(r * s), flip);
+            shape = std::make_shared<SphereShape>(to_world.point(c), float(r * s), flip, to_world.vector(Vec3(0, 0, 1)));
         } else if (t == "rectangle" || t == "cube" || t == "disk") {
             TriMesh m = t == "rectangle" ? make_rectangle_mesh() : (t == "cube" ? make_cube_mesh() : make_disk_mesh());
             m.transform(to_world);
             if (flip) m.flip_normals();
             auto ms = std::make_shared<MeshShape>(std::move(m), t);
-            double s = to_world.similarity_scale(1e-4);
-            if (s > 0) {
-                Mat4 inv = to_world.inverse();
-                SdfSample (*local)(const Vec3&) =
-                    t == "rectangle" ? sdf_rectangle_local : (t == "cube" ? sdf_cube_local : sdf_disk_local);
-                float fs = float(s);
-                float sign = flip ? -1.0f : 1.0f;
-                ms->set_analytic_sdf([=](const Vec3& p) {
-                    SdfSample l = local(inv.point(p));
-                    SdfSample w;
-                    w.f = sign * l.f * fs;
-                    w.grad = normalize(to_world.vector(l.grad)) * sign;
-                    return w;
-                });
-            }
             shape = ms;
         } else {
             throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, sphere, rectangle, cube, disk)");
@@ -379,15 +365,15 @@ private:
                                                           "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
             if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium cannot be an emitter");
             shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
+            auto surface = MeanSurface::of(*shape);
             if (kind == "gpis") {
-                auto g = create_gpis_medium(*mf_bag[0], shape);
+                auto g = create_gpis_medium(*mf_bag[0], surface);
                 scene_->media.push_back(g);
-                scene_->add_shape(make_region_boundary(shape, g->envelope(), g, g->grid()));
+                scene_->add_shape(make_region_boundary(shape, *surface, g->envelope(), g));
             } else {
-                auto m = std::static_pointer_cast<const MacrofacetMedium>(
-                    create_macrofacet_medium(*mf_bag[0], shape));  // phase 2 hook
+                auto m = create_macrofacet_medium(*mf_bag[0], surface);
                 scene_->media.push_back(m);
-                scene_->add_shape(make_region_boundary(shape, m->shell_top(), m, m->grid()));
+                scene_->add_shape(make_region_boundary(shape, *surface, m->shell_top(), m));
             }
             return;
         }

@@ -22,29 +22,6 @@ MeshShape::MeshShape(TriMesh mesh, std::string kind) : mesh_(std::move(mesh)), k
     area_ = float(acc);
 }
 
-const MeshSdf& MeshShape::mesh_sdf() const {
-    std::call_once(sdf_once_, [this] { sdf_ = std::make_unique<MeshSdf>(mesh_.p, mesh_.idx); });
-    return *sdf_;
-}
-
-SdfSample MeshShape::sdf(const Vec3& p) const {
-    if (analytic_) return analytic_(p);
-    return mesh_sdf().eval(p);
-}
-
-SdfSample MeshShape::sdf_frame(const Vec3& p, Vec3* frame_normal) const {
-    if (analytic_) {
-        SdfSample s = analytic_(p);
-        *frame_normal = s.grad;
-        return s;
-    }
-    SdfSample s = mesh_sdf().eval(p, frame_normal);
-    // Far from the surface (outside the mean surface's neighbourhood) the two agree anyway;
-    // never let the smooth normal point against the side the point is on.
-    if (!(dot(*frame_normal, s.grad) > -0.5f)) *frame_normal = s.grad;
-    return s;
-}
-
 void MeshShape::sample_position(const Vec2& u, Vec3* p, Vec3* n) const {
     float target = u.x * area_;
     size_t t = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin());
@@ -107,15 +84,6 @@ void MeshShape::fill_hit(const Ray& ray, float t, unsigned prim, float u, float 
 
 // ----------------------------------------------------------------------------------------------
 // SphereShape (Embree user geometry)
-
-SdfSample SphereShape::sdf(const Vec3& p) const {
-    SdfSample s = sdf_sphere(p, c_, r_);
-    if (flip_) {
-        s.f = -s.f;
-        s.grad = -s.grad;
-    }
-    return s;
-}
 
 Aabb SphereShape::bounds() const {
     Aabb b;

@@ -1,8 +1,8 @@
 // mfhost — shapes: Embree geometry, surface sampling and signed distance queries.
 //
-// Every shape is one Embree geometry (triangle meshes; spheres are exact user geometries) and
-// offers sdf(p) -> SdfSample{f, grad} with f > 0 on the side its normals point to. Phase 2
-// evaluates this SDF inside the macrofacet shell.
+// Every shape is one Embree geometry (triangle meshes; spheres are exact user geometries). The
+// signed distance of a shape that is the mean surface of a medium belongs to the library
+// (mean_surface.h).
 #pragma once
 
 #include <embree3/rtcore.h>
@@ -18,7 +18,6 @@
 #include "math.h"
 #include "medium.h"
 #include "mesh_io.h"
-#include "sdf.h"
 
 namespace mf {
 
@@ -38,16 +37,6 @@ struct SurfaceHit {
 class Shape {
 public:
     virtual ~Shape() = default;
-    /// Signed distance (f > 0 on the normal side) and its unit gradient.
-    virtual SdfSample sdf(const Vec3& p) const = 0;
-    /// sdf(p) plus the normal of the local frame used by macrofacet media: grad f for exact
-    /// SDFs; for a mesh SDF the interpolated vertex normal at the closest point (smooth, where
-    /// grad f of the polyhedron is piecewise constant and would show facets).
-    virtual SdfSample sdf_frame(const Vec3& p, Vec3* frame_normal) const {
-        SdfSample s = sdf(p);
-        *frame_normal = s.grad;
-        return s;
-    }
     virtual Aabb bounds() const = 0;
     virtual float surface_area() const = 0;
     /// Uniform sampling by area: position and unit normal (pdf = 1 / surface_area()).
@@ -78,8 +67,6 @@ class MeshShape final : public Shape {
 public:
     /// `mesh` must already be in world space with its final orientation.
     MeshShape(TriMesh mesh, std::string kind);
-    SdfSample sdf(const Vec3& p) const override;
-    SdfSample sdf_frame(const Vec3& p, Vec3* frame_normal) const override;
     Aabb bounds() const override { return bounds_; }
     float surface_area() const override { return area_; }
     void sample_position(const Vec2& u, Vec3* p, Vec3* n) const override;
@@ -87,11 +74,6 @@ public:
     void fill_hit(const Ray& ray, float t, unsigned prim, float u, float v, SurfaceHit* hit) const override;
     std::string kind() const override { return kind_; }
     const TriMesh& mesh() const { return mesh_; }
-    /// Exact SDF for canonical shapes placed by a similarity transform (else the mesh SDF).
-    void set_analytic_sdf(std::function<SdfSample(const Vec3&)> f) { analytic_ = std::move(f); }
-    bool has_analytic_sdf() const { return bool(analytic_); }
-    /// The BVH/pseudo-normal mesh SDF (built on first use, thread-safe).
-    const MeshSdf& mesh_sdf() const;
 
 private:
     TriMesh mesh_;
@@ -99,15 +81,13 @@ private:
     Aabb bounds_;
     float area_ = 0;
     std::vector<float> cdf_;  // cumulative triangle areas
-    std::function<SdfSample(const Vec3&)> analytic_;
-    mutable std::once_flag sdf_once_;
-    mutable std::unique_ptr<MeshSdf> sdf_;
 };
 
 class SphereShape final : public Shape {
 public:
-    SphereShape(const Vec3& center, float radius, bool flip) : c_(center), r_(radius), flip_(flip) {}
-    SdfSample sdf(const Vec3& p) const override;
+    /// `pole`: the object's +z axis in world space (Mitsuba's u runs around it).
+    SphereShape(const Vec3& center, float radius, bool flip, const Vec3& pole = Vec3(0, 0, 1))
+        : c_(center), r_(radius), flip_(flip), pole_(normalize(pole)) {}
     Aabb bounds() const override;
     float surface_area() const override { return 4.0f * kPi * r_ * r_; }
     void sample_position(const Vec2& u, Vec3* p, Vec3* n) const override;
@@ -117,6 +97,7 @@ public:
     const Vec3& center() const { return c_; }
     float radius() const { return r_; }
     bool flipped() const { return flip_; }
+    const Vec3& pole() const { return pole_; }
     /// Exact ray–sphere intersection in double precision; smallest root in (tnear, tfar).
     bool intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float* t) const;
 
@@ -124,6 +105,7 @@ private:
     Vec3 c_;
     float r_;
     bool flip_;
+    Vec3 pole_;
 };
 
 /// Mitsuba's canonical meshes (local space).

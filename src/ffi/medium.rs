@@ -108,7 +108,7 @@ pub struct mf_phase_sample_query {
 
 /// An immutable macrofacet medium. Safe to share between threads.
 pub struct mf_medium {
-    inner: MacrofacetMedium,
+    pub(crate) inner: MacrofacetMedium,
 }
 
 impl From<mf_vec3> for DVec3 {
@@ -344,7 +344,8 @@ fn phase_eval(m: &MacrofacetMedium, q: &mf_phase_query) -> FfiResult<(mf_rgb, f6
     let fr = frame(&q.frame)?;
     let wi = local_direction(&fr, "wi", q.wi)?;
     let wo = local_direction(&fr, "wo", q.wo)?;
-    Ok((rgb(m.phase.eval(wi, wo)), m.phase.pdf(wi, wo)))
+    let (value, pdf) = m.phase.eval_pdf(wi, wo);
+    Ok((rgb(value), pdf))
 }
 
 /// The phase function `p(wi, wo)` per channel (Eq. 11, flake reflectance included).
@@ -365,6 +366,29 @@ pub unsafe extern "C" fn mf_phase_eval(
         let (wi, wo) = (local_direction(&fr, "wi", wi)?, local_direction(&fr, "wo", wo)?);
         let slot = out(out_value, "out_value")?;
         *slot = rgb(m.inner.phase.eval(wi, wo));
+        Ok(())
+    })
+}
+
+/// The phase function's value and the density of [`mf_phase_sample`] for one pair of
+/// directions in one call (what next-event estimation with MIS needs; for diffuse flakes it
+/// runs their quadrature once instead of twice).
+///
+/// # Safety
+/// Pointers must be NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mf_phase_eval_pdf(
+    medium: *const mf_medium,
+    frame_: *const mf_frame,
+    wi: mf_vec3,
+    wo: mf_vec3,
+    out_value: *mut mf_phase_value,
+) -> mf_status {
+    boundary(|| {
+        let m = arg(medium, "medium")?;
+        let q = mf_phase_query { frame: *arg(frame_, "frame")?, wi, wo };
+        let (value, pdf) = phase_eval(&m.inner, &q)?;
+        *out(out_value, "out_value")? = mf_phase_value { value, pdf };
         Ok(())
     })
 }

@@ -18,10 +18,14 @@
 mod gpis;
 mod medium;
 mod params;
+mod surface;
+mod track;
 
 pub use gpis::*;
 pub use medium::*;
 pub use params::*;
+pub use surface::*;
+pub use track::*;
 
 use crate::error::{Error, ErrorKind};
 use std::cell::RefCell;
@@ -54,6 +58,8 @@ pub enum mf_status {
     MF_ERROR_INVALID_VALUE = 7106,
     /// A string argument was not valid UTF-8.
     MF_ERROR_INVALID_UTF8 = 7107,
+    /// A host callback returned a non-zero code; the message gives it.
+    MF_ERROR_CALLBACK = 7108,
     /// An internal error (a caught panic): please report it.
     MF_ERROR_INTERNAL = 7199,
 }
@@ -66,6 +72,7 @@ impl From<ErrorKind> for mf_status {
             ErrorKind::MissingParameter => mf_status::MF_ERROR_MISSING_PARAMETER,
             ErrorKind::InvalidValue => mf_status::MF_ERROR_INVALID_VALUE,
             ErrorKind::InvalidArgument => mf_status::MF_ERROR_INVALID_ARGUMENT,
+            ErrorKind::Callback => mf_status::MF_ERROR_CALLBACK,
         }
     }
 }
@@ -174,6 +181,7 @@ pub extern "C" fn mf_status_str(status: i32) -> *const c_char {
         7105 => "missing or conflicting parameters\0",
         7106 => "parameter value out of range\0",
         7107 => "string is not valid UTF-8\0",
+        7108 => "a host callback reported a failure\0",
         7199 => "internal error\0",
         _ => "unknown status\0",
     };

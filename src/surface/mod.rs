@@ -14,10 +14,12 @@
 //! SDF sign (design notes): `f > 0` outside, `f < 0` inside. Every `f` here is 1-Lipschitz.
 
 mod convex;
+mod enclosure;
 mod mesh;
 mod sphere;
 
 pub use convex::{convex_bound, Curvature};
+pub use enclosure::{enclosure, Enclosure};
 pub use mesh::TriangleMesh;
 pub use sphere::Sphere;
 
@@ -164,8 +166,10 @@ pub trait MeanSurface {
         self.point(p)
     }
 
-    /// Bounds along `p + s d`, `s ∈ [0, length]`, where `start = point(p)` (`d` unit).
-    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, cache: &mut Self::Cache) -> Result<SegmentBound>;
+    /// Bounds along `p + s d`, `s ∈ [0, length]`, where `start = point(p)` (`d` unit). The
+    /// tracker prefers bounds whose width `f_hi − f_lo` stays within `tolerance`; a surface may
+    /// shorten the segment to get there, or when bounding the whole of it would be costly.
+    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut Self::Cache) -> Result<SegmentBound>;
 
     /// A box containing every point with `f <= 0` (the mean surface and its interior). Since `f`
     /// is a signed distance, the box grown by `top` contains the medium's region `f < top`.

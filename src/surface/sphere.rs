@@ -46,7 +46,7 @@ impl MeanSurface for Sphere {
         Ok(SurfacePoint { f: self.sign() * (r - self.radius), normal: self.sign() * outward, tangent: self.pole.cross(v) })
     }
 
-    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _: &mut ()) -> Result<SegmentBound> {
+    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {
         let end = self.point(p + length * d)?;
         let curvature = if self.flip_normals { Curvature::Concave } else { Curvature::Convex };
         Ok(convex_bound(start, &end, d, length, curvature))

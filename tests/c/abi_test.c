@@ -278,6 +278,7 @@ static void test_version_and_status(void) {
                            MF_ERROR_MISSING_PARAMETER,
                            MF_ERROR_INVALID_VALUE,
                            MF_ERROR_INVALID_UTF8,
+                           MF_ERROR_CALLBACK,
                            MF_ERROR_INTERNAL};
   const size_t n = sizeof all / sizeof all[0];
   CHECK(MF_OK == 0, "MF_OK must be 0");
@@ -293,7 +294,7 @@ static void test_version_and_status(void) {
   }
   CHECK(strcmp(mf_status_str(MF_OK), "success") == 0, "MF_OK: %s", mf_status_str(MF_OK));
   /* Values that are not enumerators (valid in C: the enum is an integer type). */
-  const int unknown[] = {1, 7100, 7108, 7150, 7198, 7200, 4242};
+  const int unknown[] = {1, 7100, 7109, 7150, 7198, 7200, 4242};
   for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {
     const char *s = mf_status_str((mf_status)unknown[i]);
     CHECK(s != NULL && strcmp(s, "unknown status") == 0, "mf_status_str(%d) = \"%s\"", unknown[i], s ? s : "(null)");
@@ -1307,6 +1308,232 @@ static void test_gpis(void) {
   mf_gpis_free(renewal);
 }
 
+/* ------------------------------------------------------------------------------ surfaces and tracking */
+
+/* A host surface: the sphere of radius 1 at the origin (convex), with a call counter and a mode
+ * that makes it misbehave. */
+typedef struct {
+  int calls;
+  int mode; /* 0 fine, 1 NaN f, 2 non-unit normal, 3 error code */
+} host_sphere;
+
+static int32_t host_sphere_point(void *user_data, mf_vec3 p, mf_surface_point *out) {
+  host_sphere *h = (host_sphere *)user_data;
+  ++h->calls;
+  if (h->mode == 3) return 42;
+  double r = sqrt(dot(p, p));
+  out->f = h->mode == 1 ? NAN : r - 1.0;
+  out->normal = h->mode == 2 ? v3(0, 0, 3) : (r > 0 ? scale(p, 1.0 / r) : v3(0, 0, 1));
+  out->tangent = cross(v3(0, 0, 1), p); /* Mitsuba's dp/du around the z axis */
+  return 0;
+}
+
+/* A host bound that lies (claims f never drops below f(p)): the tracker must still stay within
+ * [0, t_max] and report what it saw as majorant violations. */
+static int32_t lying_bound(void *user_data, const mf_surface_point *start, mf_vec3 p, mf_vec3 d, double length,
+                           double tolerance, mf_segment_bound *out) {
+  (void)user_data, (void)p, (void)d, (void)tolerance;
+  out->length = length;
+  out->f_lo[0] = out->f_lo[1] = start->f;
+  out->f_hi[0] = out->f_hi[1] = INFINITY;
+  out->cos_lo = -1;
+  out->cos_hi = 1;
+  return 0;
+}
+
+static int32_t nan_bound(void *user_data, const mf_surface_point *start, mf_vec3 p, mf_vec3 d, double length,
+                         double tolerance, mf_segment_bound *out) {
+  (void)user_data, (void)start, (void)p, (void)d, (void)tolerance;
+  out->length = length;
+  out->f_lo[0] = out->f_lo[1] = NAN;
+  out->f_hi[0] = out->f_hi[1] = INFINITY;
+  out->cos_lo = -1;
+  out->cos_hi = 1;
+  return 0;
+}
+
+/* Surfaces (built in and host callbacks) and the tracking calls: equal answers for equal inputs
+ * and seeds, outputs within their ranges, the combined phase call, batches, and bad input —
+ * including a misbehaving host surface, reported at its first bad answer. */
+static void test_surfaces_and_tracking(void) {
+  mf_medium *m = gpss_conductor();
+  mf_surface *sphere = NULL, *callbacks = NULL, *mesh = NULL;
+  EXPECT_OK(mf_surface_new_sphere(v3(0, 0, 0), 1.0, false, v3(0, 0, 1), &sphere));
+  mf_surface_callbacks cb = {host_sphere_point, NULL, MF_SURFACE_CONVEX, {-1, -1, -1}, {1, 1, 1}};
+  EXPECT_OK(mf_surface_new_callbacks(&cb, &callbacks));
+  /* An octahedron of radius 2 (closed). */
+  const double octa_p[18] = {2, 0, 0, -2, 0, 0, 0, 2, 0, 0, -2, 0, 0, 0, 2, 0, 0, -2};
+  const uint32_t octa_i[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  mf_mesh octa = {octa_p, 6, octa_i, 8, NULL, NULL};
+  EXPECT_OK(mf_surface_new_mesh(&octa, &mesh));
+
+  /* Point queries: the built-in and the host sphere agree; the octahedron's face distance. */
+  host_sphere hs = {0, 0};
+  mf_surface_point a, b;
+  EXPECT_OK(mf_surface_eval(sphere, NULL, v3(0.3, 1.2, -0.4), &a));
+  EXPECT_OK(mf_surface_eval(callbacks, &hs, v3(0.3, 1.2, -0.4), &b));
+  CHECK(hs.calls == 1 && fabs(a.f - b.f) < 1e-15 && fabs(dot(a.normal, b.normal) - 1) < 1e-15, "sphere queries differ");
+  EXPECT_OK(mf_surface_eval(mesh, NULL, v3(1, 1, 1), &a));
+  CHECK_ABS(a.f, (3.0 - 2.0) / sqrt(3.0), 1e-12); /* plane x + y + z = 2 */
+  mf_vec3 lo, hi;
+  EXPECT_OK(mf_surface_bounding_box(mesh, &lo, &hi));
+  CHECK(lo.x == -2 && hi.z == 2, "octahedron bounds (%g, %g)", lo.x, hi.z);
+
+  /* Free flights and transmittance: same seed, same answer (built-in vs host sphere too). */
+  double top = 0;
+  EXPECT_OK(mf_medium_shell_top(m, &top));
+  const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99};
+  mf_collision c1, c2;
+  EXPECT_OK(mf_track_free_flight(m, sphere, NULL, &q, &c1));
+  hs.calls = 0;
+  EXPECT_OK(mf_track_free_flight(m, callbacks, &hs, &q, &c2));
+  CHECK(c1.scattered && c2.scattered && fabs(c1.t - c2.t) < 1e-12 && fabs(dot(c1.frame.normal, c2.frame.normal) - 1) < 1e-12,
+        "the host and the built-in sphere must track alike (t %.17g vs %.17g)", c1.t, c2.t);
+  CHECK(hs.calls >= (int)c2.stats.surface_queries && c2.stats.segments > 0, "callback calls %d vs queries %u",
+        hs.calls, c2.stats.surface_queries);
+  CHECK(c1.t > 0 && c1.t < 1 + top && fabs(c1.p.z - (1 + top - c1.t)) < 1e-12 && c1.stats.majorant_violations == 0,
+        "collision at t = %g, p.z = %g", c1.t, c1.p.z);
+  CHECK(fabs(dot(c1.frame.normal, c1.frame.normal) - 1) < 1e-12, "collision frame normal must be unit");
+  /* The collision's frame feeds the phase function; eval_pdf equals eval and pdf. */
+  mf_phase_value vp;
+  mf_rgb value;
+  double pdf;
+  const mf_vec3 wi = v3(0, 0, 1), wo = normalize(v3(0.3, 0.1, 0.9));
+  EXPECT_OK(mf_phase_eval_pdf(m, &c1.frame, wi, wo, &vp));
+  EXPECT_OK(mf_phase_eval(m, &c1.frame, wi, wo, &value));
+  EXPECT_OK(mf_phase_pdf(m, &c1.frame, wi, wo, &pdf));
+  CHECK(vp.pdf == pdf && same_bits(&vp.value, &value, sizeof value), "mf_phase_eval_pdf must equal eval and pdf");
+
+  mf_transmittance t1, t2;
+  const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5};
+  EXPECT_OK(mf_track_transmittance(m, sphere, NULL, &up, &t1));
+  EXPECT_OK(mf_track_transmittance(m, sphere, NULL, &up, &t2));
+  CHECK(t1.transmittance == t2.transmittance && t1.transmittance >= 0 && t1.transmittance <= 1,
+        "transmittance %g / %g", t1.transmittance, t2.transmittance);
+  /* Passing: t_max short of the shell. */
+  const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5};
+  EXPECT_OK(mf_track_free_flight(m, mesh, NULL, &shortq, &c1));
+  CHECK(!c1.scattered && c1.t == 0.5, "a ray that ends above the shell passes (t = %g)", c1.t);
+
+  /* Batches equal single calls. */
+  mf_track_query qs[3] = {q, up, shortq};
+  mf_collision cs[3];
+  mf_transmittance ts[3];
+  EXPECT_OK(mf_track_free_flight_batch(m, sphere, NULL, qs, 3, cs));
+  EXPECT_OK(mf_track_transmittance_batch(m, sphere, NULL, qs, 3, ts));
+  for (int i = 0; i < 3; ++i) {
+    mf_collision c;
+    mf_transmittance t;
+    EXPECT_OK(mf_track_free_flight(m, sphere, NULL, &qs[i], &c));
+    EXPECT_OK(mf_track_transmittance(m, sphere, NULL, &qs[i], &t));
+    CHECK(c.scattered == cs[i].scattered && c.t == cs[i].t && same_bits(&c.p, &cs[i].p, sizeof c.p) &&
+              same_bits(&c.frame, &cs[i].frame, sizeof c.frame) && t.transmittance == ts[i].transmittance,
+          "batch entry %d differs", i);
+  }
+  EXPECT_OK(mf_track_free_flight_batch(m, sphere, NULL, NULL, 0, NULL));
+
+  /* A bound that lies is caught by the violation count, and the call stays in range. */
+  mf_surface *liar = NULL;
+  mf_surface_callbacks lcb = {host_sphere_point, lying_bound, MF_SURFACE_GENERAL, {-1, -1, -1}, {1, 1, 1}};
+  EXPECT_OK(mf_surface_new_callbacks(&lcb, &liar));
+  hs.mode = 0;
+  unsigned violations = 0;
+  for (uint64_t seed = 0; seed < 50; ++seed) {
+    mf_track_query lq = q;
+    lq.seed = seed;
+    EXPECT_OK(mf_track_free_flight(m, liar, &hs, &lq, &c1));
+    CHECK(!c1.scattered || (c1.t >= 0 && c1.t <= 1 + top), "t = %g outside the segment", c1.t);
+    violations += c1.stats.majorant_violations;
+  }
+  CHECK(violations > 0, "a lying bound must show as majorant violations");
+
+  /* Bad input: statuses, untouched outputs, and a misbehaving host reported at once. */
+  mf_collision before;
+  memset(&c1, 0xA5, sizeof c1);
+  before = c1;
+#define TRACK_CASE(call, status, needle)                                                        \
+  do {                                                                                          \
+    EXPECT_STATUS(call, status, needle);                                                        \
+    CHECK(same_bits(&before, &c1, sizeof c1), "%s wrote its out-parameter on failure", #call); \
+  } while (0)
+  mf_track_query bad = q;
+  bad.d = v3(0, 0, -2);
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+  bad = q;
+  bad.origin.x = NAN;
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "origin");
+  bad = q;
+  bad.t_max = -1;
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "t_max");
+  TRACK_CASE(mf_track_free_flight(NULL, sphere, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "medium");
+  TRACK_CASE(mf_track_free_flight(m, NULL, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "surface");
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, &c1), MF_ERROR_NULL_POINTER, "query");
+  EXPECT_STATUS(mf_track_free_flight(m, sphere, NULL, &q, NULL), MF_ERROR_NULL_POINTER, "out_collision");
+  for (int mode = 1; mode <= 3; ++mode) {
+    hs.mode = mode;
+    hs.calls = 0;
+    TRACK_CASE(mf_track_free_flight(m, callbacks, &hs, &q, &c1), mode == 3 ? MF_ERROR_CALLBACK : MF_ERROR_INVALID_ARGUMENT,
+               mode == 3 ? "returned 42" : (mode == 1 ? "f must not be NaN" : "normal must be unit"));
+    CHECK(hs.calls == 1, "a bad host answer must be reported at once (%d calls)", hs.calls);
+  }
+  hs.mode = 0;
+  mf_surface *nan_bounds = NULL;
+  mf_surface_callbacks ncb = {host_sphere_point, nan_bound, MF_SURFACE_GENERAL, {-1, -1, -1}, {1, 1, 1}};
+  EXPECT_OK(mf_surface_new_callbacks(&ncb, &nan_bounds));
+  TRACK_CASE(mf_track_free_flight(m, nan_bounds, &hs, &q, &c1), MF_ERROR_INVALID_ARGUMENT, "segment bound");
+  /* A batch with one bad query writes nothing and names it. */
+  qs[1].d = v3(1, 1, 1);
+  memset(cs, 0xA5, sizeof cs);
+  mf_collision cs_before[3];
+  memcpy(cs_before, cs, sizeof cs);
+  EXPECT_STATUS(mf_track_free_flight_batch(m, sphere, NULL, qs, 3, cs), MF_ERROR_INVALID_ARGUMENT, "query 1");
+  CHECK(same_bits(cs_before, cs, sizeof cs), "a failed batch must write nothing");
+#undef TRACK_CASE
+
+  /* Surface construction errors. */
+  mf_surface *s = (mf_surface *)0x1;
+  EXPECT_STATUS(mf_surface_new_sphere(v3(0, 0, 0), -1.0, false, v3(0, 0, 1), &s), MF_ERROR_INVALID_VALUE, "radius");
+  EXPECT_STATUS(mf_surface_new_sphere(v3(0, 0, 0), 1.0, false, v3(0, 0, 0), &s), MF_ERROR_INVALID_ARGUMENT, "pole");
+  mf_surface_callbacks no_point = {NULL, NULL, MF_SURFACE_CONVEX, {-1, -1, -1}, {1, 1, 1}};
+  EXPECT_STATUS(mf_surface_new_callbacks(&no_point, &s), MF_ERROR_NULL_POINTER, "callbacks->point");
+  mf_surface_callbacks bad_shape = {host_sphere_point, NULL, 9, {-1, -1, -1}, {1, 1, 1}};
+  EXPECT_STATUS(mf_surface_new_callbacks(&bad_shape, &s), MF_ERROR_INVALID_ARGUMENT, "shape");
+  mf_surface_callbacks bad_box = {host_sphere_point, NULL, MF_SURFACE_CONVEX, {1, -1, -1}, {-1, 1, 1}};
+  EXPECT_STATUS(mf_surface_new_callbacks(&bad_box, &s), MF_ERROR_INVALID_ARGUMENT, "bounds_min");
+  const uint32_t open_i[3] = {0, 2, 4};
+  mf_mesh open = {octa_p, 6, open_i, 1, NULL, NULL};
+  EXPECT_STATUS(mf_surface_new_mesh(&open, &s), MF_ERROR_INVALID_ARGUMENT, "not closed");
+  const uint32_t bad_i[3] = {0, 2, 40};
+  mf_mesh out_of_range = {octa_p, 6, bad_i, 1, NULL, NULL};
+  EXPECT_STATUS(mf_surface_new_mesh(&out_of_range, &s), MF_ERROR_INVALID_ARGUMENT, "refers to vertex");
+  mf_mesh no_positions = {NULL, 6, octa_i, 8, NULL, NULL};
+  EXPECT_STATUS(mf_surface_new_mesh(&no_positions, &s), MF_ERROR_NULL_POINTER, "mesh->positions");
+  CHECK(s == (mf_surface *)0x1, "a failed mf_surface_new_* wrote its out-parameter");
+  EXPECT_STATUS(mf_surface_eval(sphere, NULL, v3(INFINITY, 0, 0), &a), MF_ERROR_INVALID_ARGUMENT, "p must be finite");
+
+  /* The enclosure of the shell around the octahedron: a closed, non-empty mesh. */
+  mf_enclosure *e = NULL;
+  EXPECT_OK(mf_surface_enclosure(mesh, NULL, top, 0.0, &e));
+  mf_mesh em;
+  EXPECT_OK(mf_enclosure_mesh(e, &em));
+  CHECK(em.triangle_count > 0 && em.vertex_count > 0 && em.normals == NULL, "enclosure mesh %zu triangles",
+        em.triangle_count);
+  double max_x = -1e300;
+  for (size_t i = 0; i < em.vertex_count; ++i) max_x = em.positions[3 * i] > max_x ? em.positions[3 * i] : max_x;
+  CHECK(max_x >= 2 + top, "the enclosure must reach beyond the shell (%g)", max_x);
+  mf_enclosure_free(e);
+  mf_enclosure_free(NULL);
+  EXPECT_STATUS(mf_surface_enclosure(sphere, NULL, NAN, 0.0, &e), MF_ERROR_INVALID_ARGUMENT, "level");
+
+  mf_surface_free(liar);
+  mf_surface_free(nan_bounds);
+  mf_surface_free(sphere);
+  mf_surface_free(callbacks);
+  mf_surface_free(mesh);
+  mf_surface_free(NULL);
+  mf_medium_free(m);
+}
+
 int main(void) {
   test_last_error_message(); /* first: checks the fresh-thread state */
   test_version_and_status();
@@ -1319,6 +1546,7 @@ int main(void) {
   test_batches();
   test_bad_query_arguments();
   test_gpis();
+  test_surfaces_and_tracking();
   if (g_failures) {
     fprintf(stderr, "abi_test: %d of %d checks FAILED\n", g_failures, g_checks);
     return 1;

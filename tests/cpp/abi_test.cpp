@@ -2,8 +2,9 @@
 // std::unique_ptr with the library's *_free as deleter, and ONE medium shared by 8 threads.
 //
 // What it checks and why:
-//  - An mf_medium is documented as immutable and shareable: 8 std::threads hammer the same handle
-//    with free-flight sampling, transmittance, phase sampling and evaluation, each with its own
+//  - An mf_medium and an mf_surface are documented as immutable and shareable: 8 std::threads
+//    hammer the same handles with free-flight sampling, transmittance, tracking through a mesh
+//    surface, phase sampling and evaluation, each with its own
 //    deterministic random numbers, and every result must equal a single-threaded run on the same
 //    inputs EXACTLY (bitwise; no tolerance: the computation is deterministic and shares no
 //    mutable state, so any difference would be a data race or hidden state).
@@ -50,8 +51,12 @@ struct MediumDeleter {
   // Shared read-only after creation; freeing is the one mutation (mf_medium_free takes non-const).
   void operator()(const mf_medium *m) const { mf_medium_free(const_cast<mf_medium *>(m)); }
 };
+struct SurfaceDeleter {
+  void operator()(const mf_surface *s) const { mf_surface_free(const_cast<mf_surface *>(s)); }
+};
 using Params = std::unique_ptr<mf_params, ParamsDeleter>;
 using Medium = std::unique_ptr<const mf_medium, MediumDeleter>;
+using Surface = std::unique_ptr<const mf_surface, SurfaceDeleter>;
 
 std::string last_error() {
   size_t len = 0;
@@ -67,6 +72,16 @@ void ok(mf_status s, const char *what) {
     ++g_failures;
     std::fprintf(stderr, "%s: %s (%s)\n", what, mf_status_str(s), last_error().c_str());
   }
+}
+
+// An octahedron of radius 1.5 as a mesh surface.
+Surface make_surface() {
+  const double p[18] = {1.5, 0, 0, -1.5, 0, 0, 0, 1.5, 0, 0, -1.5, 0, 0, 0, 1.5, 0, 0, -1.5};
+  const uint32_t idx[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  const mf_mesh mesh = {p, 6, idx, 8, nullptr, nullptr};
+  mf_surface *s = nullptr;
+  ok(mf_surface_new_mesh(&mesh, &s), "mf_surface_new_mesh");
+  return Surface(s);
 }
 
 Medium make_medium() {
@@ -106,6 +121,8 @@ struct Rng {
 struct Result {
   mf_free_flight flight;
   double transmittance;
+  mf_collision tracked;
+  double tracked_transmittance;
   phase_sample_t sample;
   mf_rgb value;
   double pdf;
@@ -114,6 +131,9 @@ struct Result {
 bool same(const Result &a, const Result &b) {
   auto eq = [](const void *x, const void *y, size_t n) { return std::memcmp(x, y, n) == 0; };
   return a.flight.scattered == b.flight.scattered && eq(&a.flight.t, &b.flight.t, sizeof(double)) &&
+         a.tracked.scattered == b.tracked.scattered && eq(&a.tracked.t, &b.tracked.t, sizeof(double)) &&
+         eq(&a.tracked.frame, &b.tracked.frame, sizeof(mf_frame)) &&
+         eq(&a.tracked_transmittance, &b.tracked_transmittance, sizeof(double)) &&
          eq(&a.transmittance, &b.transmittance, sizeof(double)) && a.sample.valid == b.sample.valid &&
          eq(&a.sample.wo, &b.sample.wo, sizeof(mf_vec3)) && eq(&a.sample.weight, &b.sample.weight, sizeof(mf_rgb)) &&
          eq(&a.sample.pdf, &b.sample.pdf, sizeof(double)) && eq(&a.value, &b.value, sizeof(mf_rgb)) &&
@@ -124,7 +144,7 @@ constexpr int kThreads = 8;
 constexpr int kItemsPerThread = 4000;
 
 // The work of thread `t` (also run on the main thread for the reference).
-std::vector<Result> work(const mf_medium *m, int t, int *errors) {
+std::vector<Result> work(const mf_medium *m, const mf_surface *surface, int t, int *errors) {
   Rng rng{0x1234567ull + 0x9E3779B97F4A7C15ull * static_cast<uint64_t>(t)};
   const mf_frame frames[2] = {{{0, 0, 1}, {1, 0, 0}}, {{1, 2, 2}, {2, 1, -2}}};
   std::vector<Result> out(kItemsPerThread);
@@ -146,6 +166,12 @@ std::vector<Result> work(const mf_medium *m, int t, int *errors) {
     bad += mf_phase_sample(m, &frame, wi, us, &r.sample) != MF_OK;
     bad += mf_phase_eval(m, &frame, wi, wo, &r.value) != MF_OK;
     bad += mf_phase_pdf(m, &frame, wi, wo, &r.pdf) != MF_OK;
+    // Tracking through the shared mesh: from a random point near the octahedron, inward.
+    const mf_track_query q = {{1.8 * d.x, 1.8 * d.y, 1.8 * d.z}, wi, t_max, static_cast<uint64_t>(t) << 32 | i};
+    mf_transmittance tr;
+    bad += mf_track_free_flight(m, surface, nullptr, &q, &r.tracked) != MF_OK;
+    bad += mf_track_transmittance(m, surface, nullptr, &q, &tr) != MF_OK;
+    r.tracked_transmittance = tr.transmittance;
     *errors += bad;
   }
   return out;
@@ -153,13 +179,14 @@ std::vector<Result> work(const mf_medium *m, int t, int *errors) {
 
 void test_shared_medium_threads() {
   Medium medium = make_medium();
-  CHECK(medium != nullptr, "no medium");
-  if (!medium) return;
+  Surface surface = make_surface();
+  CHECK(medium != nullptr && surface != nullptr, "no medium or surface");
+  if (!medium || !surface) return;
 
   // Reference: single-threaded, on the main thread.
   std::vector<std::vector<Result>> reference(kThreads);
   int errors = 0;
-  for (int t = 0; t < kThreads; ++t) reference[t] = work(medium.get(), t, &errors);
+  for (int t = 0; t < kThreads; ++t) reference[t] = work(medium.get(), surface.get(), t, &errors);
   CHECK(errors == 0, "reference run had " + std::to_string(errors) + " failing calls");
 
   // The same work on 8 threads at once, all on the one handle; several rounds for overlap.
@@ -168,21 +195,23 @@ void test_shared_medium_threads() {
     std::array<int, kThreads> thread_errors{};
     std::vector<std::thread> threads;
     for (int t = 0; t < kThreads; ++t) {
-      threads.emplace_back([&, t] { results[t] = work(medium.get(), t, &thread_errors[t]); });
+      threads.emplace_back([&, t] { results[t] = work(medium.get(), surface.get(), t, &thread_errors[t]); });
     }
     for (auto &th : threads) th.join();
     for (int t = 0; t < kThreads; ++t) {
       CHECK(thread_errors[t] == 0, "thread " + std::to_string(t) + ": failing calls");
-      int mismatches = 0, scattered = 0, valid = 0;
+      int mismatches = 0, scattered = 0, valid = 0, tracked = 0;
       for (int i = 0; i < kItemsPerThread; ++i) {
         mismatches += !same(results[t][i], reference[t][i]);
         scattered += results[t][i].flight.scattered;
+        tracked += results[t][i].tracked.scattered;
         valid += results[t][i].sample.valid;
       }
       CHECK(mismatches == 0, "round " + std::to_string(round) + ", thread " + std::to_string(t) + ": " +
                                  std::to_string(mismatches) + " results differ from the single-threaded run");
       CHECK(scattered > 0 && scattered < kItemsPerThread, "free flights: both outcomes expected");
       CHECK(valid > kItemsPerThread / 2, "phase samples: mostly valid expected");
+      CHECK(tracked > 0 && tracked < kItemsPerThread, "tracked flights: both outcomes expected");
     }
   }
 }
@@ -234,6 +263,6 @@ int main() {
     std::fprintf(stderr, "abi_test_cpp: %d checks FAILED\n", g_failures);
     return 1;
   }
-  std::printf("abi_test_cpp: all checks passed (%d threads x %d items on one medium)\n", kThreads, kItemsPerThread);
+  std::printf("abi_test_cpp: all checks passed (%d threads x %d items on one medium and surface)\n", kThreads, kItemsPerThread);
   return 0;
 }

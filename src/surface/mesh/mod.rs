@@ -14,71 +14,44 @@
 //! the gradient, from the monotone derivatives of the `d_T`). A point query on the current
 //! segment searches the candidates only.
 
+mod bvh;
+mod grid;
+mod lines;
+mod triangle;
+
 use super::{Aabb, MeanSurface, SegmentBound, SurfacePoint};
 use crate::error::{Error, ErrorKind, Result};
+use bvh::Bvh;
 use glam::{DVec2, DVec3};
+use grid::CellGrid;
+use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, retained, Tangent};
+use smallvec::SmallVec;
 use std::collections::HashMap;
+use triangle::{closest_among, closest_on_triangle, Closest, Feature, Triangle};
 
-/// Triangles per leaf of the hierarchy.
-const LEAF_SIZE: usize = 4;
+/// Per-candidate values of a segment bound, on the stack.
+type Few<T> = SmallVec<[T; MAX_CANDIDATES]>;
 
-/// Where on a triangle the closest point lies; decides which pseudo-normal gives the sign.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Feature {
-    Face,
-    /// Edge `i` runs from corner `i` to corner `(i + 1) % 3`.
-    Edge(usize),
-    Vertex(usize),
-}
+/// The most candidate triangles a segment bound considers (each costs two closest-point
+/// queries); with more, the cheap bound is used.
+const MAX_CANDIDATES: usize = 16;
+/// The bounds are padded by this many `epsilon` (rounding, and an undetermined sign right at
+/// the start of a segment).
+const PAD: f64 = 8.0;
+/// The grid's cells, in mean edge lengths.
+const CELL_EDGES: f64 = 0.25;
 
-#[derive(Clone, Debug)]
-struct Triangle {
-    p: [DVec3; 3],
-    /// Unit face normal from the winding; zero for a degenerate (zero-area) triangle.
-    n: DVec3,
-    /// Pseudo-normals of the edges (sum of the adjacent faces' normals) and of the corners
-    /// (angle-weighted), for the sign of the distance.
-    edge_pn: [DVec3; 3],
-    vertex_pn: [DVec3; 3],
-    /// Vertex (shading) normals, when the mesh has them.
-    shading: Option<[DVec3; 3]>,
-    /// A lower bound of `|Σ b_i n_i|` over the triangle's barycentric coordinates (0: none).
-    shading_min_length: f64,
-    /// A Lipschitz constant of `c ↦ Σ b_i(c) n_i` over the triangle (per unit of distance).
-    shading_lipschitz: f64,
-    /// Mitsuba's `dp/du` for this triangle.
-    dpdu: DVec3,
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    min: DVec3,
-    max: DVec3,
-    /// Inner node: index of the left child (the right one follows it). Leaf: first triangle.
-    first: u32,
-    /// Triangles in a leaf; 0 for inner nodes.
-    count: u32,
-}
-
-/// The closest point of a triangle to a query point.
-#[derive(Clone, Copy, Debug)]
-struct Closest {
-    triangle: u32,
-    point: DVec3,
-    barycentric: DVec3,
-    feature: Feature,
-    distance_sq: f64,
-}
-
-/// A closed (or open) triangle mesh in world space; see the module documentation.
+/// A closed triangle mesh in world space; see the module documentation.
 #[derive(Clone, Debug)]
 pub struct TriangleMesh {
+    /// In the hierarchy's leaf order.
     triangles: Vec<Triangle>,
-    /// The hierarchy's nodes; triangles are stored in leaf order.
-    nodes: Vec<Node>,
+    bvh: Bvh,
+    grid: CellGrid,
     bounds: Aabb,
-    /// Distances below this are rounding noise of the coordinates (1e-12 of the mesh's extent
-    /// and offset): there the direction `p − c` is meaningless, and the bounds are padded by it.
+    /// Distances below this are rounding noise of the coordinates (1e-13 of the mesh's extent
+    /// and offset, a hundred times their rounding): there the direction `p − c` is
+    /// meaningless, and the bounds are padded by a multiple of it.
     epsilon: f64,
 }
 
@@ -156,6 +129,23 @@ impl TriangleMesh {
             }
         }
 
+        // A medium fills the mesh's interior: the mesh must be closed (every edge shared by an
+        // even number of triangles; zero-area triangles count like any other).
+        let mut edge_uses: HashMap<(u32, u32), u32> = HashMap::new();
+        for tri in indices {
+            let w = corners(tri);
+            for i in 0..3 {
+                let (u, v) = (w[i], w[(i + 1) % 3]);
+                if u != v {
+                    *edge_uses.entry((u.min(v), u.max(v))).or_insert(0) += 1;
+                }
+            }
+        }
+        let open = edge_uses.values().filter(|&&n| n % 2 == 1).count();
+        if open > 0 {
+            return Err(invalid(format!("the mesh is not closed: {open} edges belong to an odd number of triangles (a mean surface must enclose its interior)")));
+        }
+
         let mut triangles: Vec<Triangle> = indices
             .iter()
             .map(|tri| {
@@ -192,89 +182,33 @@ impl TriangleMesh {
                         }
                     }),
                     dpdu: dpdu(&p, n, uvs.map(|uv| tri.map(|v| uv[v as usize]))),
+                    centre: (p[0] + p[1] + p[2]) / 3.0,
+                    radius: p.iter().map(|v| (*v - (p[0] + p[1] + p[2]) / 3.0).length()).fold(0.0, f64::max),
                 }
             })
             .collect();
 
-        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-        let mut nodes = vec![Node { min: DVec3::ZERO, max: DVec3::ZERO, first: 0, count: 0 }];
-        let centroids: Vec<DVec3> = triangles.iter().map(|t| (t.p[0] + t.p[1] + t.p[2]) / 3.0).collect();
-        build(&mut nodes, &triangles, &centroids, &mut order, 0, 0, triangles.len());
-        let mut sorted: Vec<Triangle> = order.iter().map(|&i| triangles[i as usize].clone()).collect();
-        std::mem::swap(&mut triangles, &mut sorted);
-        let bounds = Aabb { min: nodes[0].min, max: nodes[0].max };
-        let epsilon = 1e-12 * (bounds.max - bounds.min).max_element().max(bounds.max.abs().max(bounds.min.abs()).max_element()).max(1e-300);
-        Ok(TriangleMesh { triangles, nodes, bounds, epsilon })
+        let mean_edge = indices
+            .iter()
+            .map(|t| (positions[t[1] as usize] - positions[t[0] as usize]).length() + (positions[t[2] as usize] - positions[t[1] as usize]).length() + (positions[t[0] as usize] - positions[t[2] as usize]).length())
+            .sum::<f64>()
+            / (3 * indices.len()) as f64;
+        let bvh = Bvh::build(&mut triangles);
+        let (min, max) = bvh.bounds();
+        let grid = CellGrid::build(&bvh, &triangles, min, max, CELL_EDGES * mean_edge);
+        let bounds = Aabb { min, max };
+        let epsilon = 1e-13 * (bounds.max - bounds.min).max_element().max(bounds.max.abs().max(bounds.min.abs()).max_element()).max(1e-300);
+        Ok(TriangleMesh { triangles, bvh, grid, bounds, epsilon })
     }
 
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
 
-    /// The closest point of the whole mesh to `p`.
+    /// The closest point of the whole mesh to `p`: from the grid's list near the surface, else
+    /// by the hierarchy.
     fn closest(&self, p: DVec3) -> Closest {
-        let mut best = Closest { triangle: 0, point: DVec3::ZERO, barycentric: DVec3::ZERO, feature: Feature::Face, distance_sq: f64::INFINITY };
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let node = self.nodes[stack[top] as usize];
-            // `>`, not `>=`: a triangle at the same distance with a smaller index wins ties.
-            if box_distance_sq(&node, p) > best.distance_sq {
-                continue;
-            }
-            if node.count > 0 {
-                for i in node.first..node.first + node.count {
-                    let c = closest_on_triangle(&self.triangles[i as usize], p, i);
-                    if closer(&c, &best) {
-                        best = c;
-                    }
-                }
-            } else {
-                // Visit the nearer child first.
-                let (l, r) = (node.first, node.first + 1);
-                let (dl, dr) = (box_distance_sq(&self.nodes[l as usize], p), box_distance_sq(&self.nodes[r as usize], p));
-                let (near, far) = if dl <= dr { (l, r) } else { (r, l) };
-                stack[top] = far;
-                stack[top + 1] = near;
-                top += 2;
-            }
-        }
-        best
-    }
-
-    /// Every triangle within distance `radius` of `p`.
-    fn within(&self, p: DVec3, radius: f64, out: &mut Vec<u32>) {
-        out.clear();
-        let r2 = radius * radius;
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let node = self.nodes[stack[top] as usize];
-            if box_distance_sq(&node, p) > r2 {
-                continue;
-            }
-            if node.count > 0 {
-                out.extend((node.first..node.first + node.count).filter(|&i| closest_on_triangle(&self.triangles[i as usize], p, i).distance_sq <= r2));
-            } else {
-                stack[top] = node.first;
-                stack[top + 1] = node.first + 1;
-                top += 2;
-            }
-        }
-    }
-
-    /// The closest point among `candidates` (which must contain the mesh's closest point).
-    fn closest_among(&self, p: DVec3, candidates: &[u32]) -> Closest {
-        let mut best = Closest { triangle: 0, point: DVec3::ZERO, barycentric: DVec3::ZERO, feature: Feature::Face, distance_sq: f64::INFINITY };
-        for &i in candidates {
-            let c = closest_on_triangle(&self.triangles[i as usize], p, i);
-            if closer(&c, &best) {
-                best = c;
-            }
-        }
-        best
+        self.grid.closest(&self.triangles, p).unwrap_or_else(|| self.bvh.closest(&self.triangles, p))
     }
 
     /// The surface point of a closest-point result.
@@ -323,58 +257,6 @@ impl TriangleMesh {
     }
 }
 
-/// A candidate triangle's distance at a point of a segment and its derivative along `d`, and
-/// the signed distance to its plane with its derivative.
-#[derive(Clone, Copy, Debug)]
-struct Tangent {
-    closest: Closest,
-    distance: f64,
-    slope: f64,
-    /// False when rounding makes `slope` too inaccurate for a supporting line.
-    reliable: bool,
-    plane: f64,
-    plane_slope: f64,
-}
-
-/// Lower lines of a triangle's convex distance `d_T` along a segment: the tangent at a point
-/// of it (`d_T` is convex) and `±` the signed plane distance (`d_T >= |plane|`, exact over the
-/// triangle's interior). As (value at 0, slope), lowered by `eps` for rounding.
-fn lower_lines(t: &Tangent, at: f64, eps: f64) -> [(f64, f64); 3] {
-    // Without a reliable derivative, the Lipschitz line falling away from `at` into the segment.
-    let tangent_slope = if t.reliable { t.slope } else if at == 0.0 { -1.0 } else { 1.0 };
-    [(t.distance, tangent_slope), (t.plane, t.plane_slope), (-t.plane, -t.plane_slope)].map(|(v, k)| (v - k * at - eps, k))
-}
-
-/// How far from `s = 0` every candidate keeps a positive lower line (so `|f| > 0`): for each
-/// candidate the farthest zero of its lines that start positive (`∞` if one does not decrease),
-/// then the nearest over candidates. `None` when some candidate has no line positive at 0.
-fn positive_until(lines: &[[(f64, f64); 3]]) -> Option<f64> {
-    lines.iter().try_fold(f64::INFINITY, |reach: f64, ls| {
-        let own = ls.iter().filter(|(v, _)| *v > 0.0).map(|&(v, k)| if k < 0.0 { v / -k } else { f64::INFINITY }).fold(f64::NEG_INFINITY, f64::max);
-        (own > 0.0).then_some(reach.min(own))
-    })
-}
-
-/// The line (of both ends' lower lines) with the largest minimum over `[0, length]`: the bound
-/// is a minimum over triangles, so a line that dips anywhere costs there.
-fn best_lower_line(start: &Tangent, end: &Tangent, length: f64, eps: f64) -> (f64, f64) {
-    lower_lines(start, 0.0, eps)
-        .into_iter()
-        .chain(std::iter::once(lower_lines(end, length, eps)[0]))
-        .max_by(|a, b| a.0.min(a.0 + a.1 * length).total_cmp(&b.0.min(b.0 + b.1 * length)))
-        .expect("four lines")
-}
-
-/// The elements of `v` whose flag in `keep` is set.
-fn retained<T>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
-    v.into_iter().zip(keep).filter(|(_, k)| **k).map(|(x, _)| x).collect()
-}
-
-/// The closest point among the candidates' tangents.
-fn closest_of(tangents: &[Tangent]) -> Closest {
-    tangents.iter().map(|t| t.closest).reduce(|best, c| if closer(&c, &best) { c } else { best }).expect("candidates are not empty")
-}
-
 impl TriangleMesh {
     /// `d_T(q)` and `d/ds d_T(q + s d)` for every candidate `T`. At distance 0 the triangle's
     /// plane gives the slope of a supporting line of the convex `d_T`.
@@ -384,7 +266,7 @@ impl TriangleMesh {
     /// segment of `length` when the distance is below `2e-3 length`: there the derivative is
     /// marked unreliable (the tangent is replaced by the Lipschitz line, the gradient's range by
     /// `[-1, 1]`).
-    fn tangents(&self, q: DVec3, d: DVec3, candidates: &[u32], length: f64) -> Vec<Tangent> {
+    fn tangents(&self, q: DVec3, d: DVec3, candidates: &[u32], length: f64) -> Few<Tangent> {
         candidates
             .iter()
             .map(|&i| {
@@ -407,6 +289,29 @@ impl TriangleMesh {
     }
 }
 
+impl TriangleMesh {
+    /// The bound without candidate triangles, over at most `max(|f(p)|, tolerance / 2)`: within
+    /// `|f(p)|` of the start the sign of `f` cannot change, so one side is the chord of the
+    /// distance to the triangle closest at the start (`|f| <= d_T`, convex) and the other the
+    /// Lipschitz line; beyond, both are Lipschitz lines. Any frame normal.
+    fn far_bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64) -> SegmentBound {
+        let reach = start.f.abs() * (1.0 - 1e-12);
+        let length = length.min(reach.max(0.5 * tolerance)).max(f64::MIN_POSITIVE);
+        let mut bound = SegmentBound::lipschitz(start.f, length);
+        if length <= reach {
+            let nearest = self.closest(p).triangle;
+            let end = closest_on_triangle(&self.triangles[nearest as usize], p + length * d, nearest);
+            let chord = [start.f.abs() + PAD * self.epsilon, end.distance_sq.sqrt() + PAD * self.epsilon];
+            if start.f > 0.0 {
+                bound.f_hi = chord;
+            } else {
+                bound.f_lo = [-chord[0], -chord[1]];
+            }
+        }
+        bound
+    }
+}
+
 impl MeanSurface for TriangleMesh {
     type Cache = MeshCache;
 
@@ -418,28 +323,53 @@ impl MeanSurface for TriangleMesh {
         if cache.candidates.is_empty() {
             return self.point(p);
         }
-        Ok(self.surface_point(p, &self.closest_among(p, &cache.candidates)))
+        Ok(self.surface_point(p, &closest_among(&self.triangles, p, &cache.candidates)))
     }
 
-    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> Result<SegmentBound> {
-        // Triangles that can be closest to a point q of the segment: |f(q)| <= |f(p)| + L and
-        // |q − p| <= L, so they lie within |f(p)| + 2L of p (with a relative margin for rounding).
-        let radius = (start.f.abs() + 2.0 * length) * (1.0 + 1e-9) + 1e-12;
-        self.within(p, radius, &mut cache.candidates);
-        if cache.candidates.is_empty() {
-            // Only rounding can get here (the closest triangle is within |f(p)|).
-            cache.candidates.push(self.closest(p).triangle);
+    fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> Result<SegmentBound> {
+        // The candidates: the union of the grid's lists along the segment, less the triangles
+        // that cannot be closest anywhere on it (the closest triangle to q(s) lies within
+        // |f(q(s))| <= tent(s) = min(|f(p)| + s, |f(end)| + L − s) of it, f being 1-Lipschitz).
+        // Away from the surface (outside the grid's band) or with many candidates, the cheap
+        // bound costs less than the tentative collisions that a tight one would save.
+        let end_p = p + length * d;
+        let end_closest = self.closest(end_p);
+        let f_end = self.surface_point(end_p, &end_closest).f;
+        let tent = (start.f.abs(), f_end.abs());
+        let found = self.grid.segment(p, d, length, &mut cache.candidates) && {
+            // Drop the triangles whose bounding sphere stays beyond the tent from the segment.
+            let reach = 0.5 * (tent.0 + tent.1 + length) * (1.0 + 1e-9) + self.epsilon;
+            cache.candidates.retain(|&i| {
+                let t = &self.triangles[i as usize];
+                let along = (t.centre - p).dot(d).clamp(0.0, length);
+                (t.centre - (p + along * d)).length() - t.radius <= reach
+            });
+            cache.candidates.len() <= MAX_CANDIDATES
+        };
+        let found = found.then_some((end_closest, f_end, tent));
+        let Some((end_closest, f_end, tent)) = found else {
+            cache.candidates.clear();
+            return Ok(self.far_bound(start, p, d, length, tolerance));
+        };
+        if !cache.candidates.contains(&end_closest.triangle) {
+            cache.candidates.push(end_closest.triangle); // guards against rounding
         }
         let first = self.tangents(p, d, &cache.candidates, length);
-        let mut last = self.tangents(p + length * d, d, &cache.candidates, length);
-        let f_end = self.surface_point(p + length * d, &closest_of(&last)).f;
+        let last = self.tangents(p + length * d, d, &cache.candidates, length);
+        let mut keep: Few<bool> = first.iter().zip(&last).map(|(a, b)| may_be_closest(a, b, tent, length, self.epsilon)).collect();
+        // The closest triangle at the end always qualifies (this guards against rounding).
+        if let Some(k) = cache.candidates.iter().position(|&i| i == end_closest.triangle) {
+            keep[k] = true;
+        }
+        retain_flagged(&mut cache.candidates, &keep);
+        let (first, mut last) = (retained(first, &keep), retained(last, &keep));
 
         // Lower lines of |f(p + s d)| = min_T d_T: per candidate lines below d_T, lowered by the
         // coordinates' rounding (about `epsilon`). The sign of f can only change where every
         // line of some candidate is <= 0.
         let eps = self.epsilon;
-        let start_lines: Vec<[(f64, f64); 3]> = first.iter().map(|t| lower_lines(t, 0.0, eps)).collect();
-        let end_lines: Vec<[(f64, f64); 3]> = last.iter().map(|t| lower_lines(t, length, eps)).collect();
+        let start_lines: Few<[(f64, f64); 3]> = first.iter().map(|t| lower_lines(t, 0.0, eps)).collect();
+        let end_lines: Few<[(f64, f64); 3]> = last.iter().map(|t| lower_lines(t, length, eps)).collect();
         // Within |f(p)| of the start the sign cannot change either (f is 1-Lipschitz).
         let lipschitz_reach = start.f.abs() * (1.0 - 1e-12);
         // A cut shorter than this is not worth a segment of its own.
@@ -448,9 +378,11 @@ impl MeanSurface for TriangleMesh {
             (first_zero.max(lipschitz_reach).min(length), start.f.signum())
         } else {
             // Mirrored: from the end, the sign is that of f(L) after the last zero.
-            let mirrored: Vec<[(f64, f64); 3]> = end_lines.iter().map(|ls| ls.map(|(v, k)| (v + k * length, -k))).collect();
+            let mirrored: Few<[(f64, f64); 3]> = end_lines.iter().map(|ls| ls.map(|(v, k)| (v + k * length, -k))).collect();
             match positive_until(&mirrored).map(|reach| length - reach) {
-                Some(last_zero) if last_zero <= lipschitz_reach.max(3.0 * eps) => (length, f_end.signum()),
+                // An undetermined sign within `|f| <= |f(p)| + last_zero <= PAD eps` of the start
+                // is inside the bounds' padding.
+                Some(last_zero) if last_zero <= lipschitz_reach || start.f.abs() + last_zero <= PAD * eps => (length, f_end.signum()),
                 Some(last_zero) if last_zero < length - min_piece => (last_zero, 0.0),
                 _ => (length, 0.0),
             }
@@ -461,18 +393,14 @@ impl MeanSurface for TriangleMesh {
             last = self.tangents(p + piece * d, d, &cache.candidates, piece);
         }
         // On the piece, the best of all four lines per candidate.
-        let lines: Vec<(f64, f64)> = first.iter().zip(&last).map(|(a, b)| best_lower_line(a, b, piece, eps)).collect();
+        let lines: Few<(f64, f64)> = first.iter().zip(&last).map(|(a, b)| best_lower_line(a, b, piece, eps)).collect();
         // The chord of one triangle bounds min_T d_T from above; take the closest overall.
         let k = (0..first.len()).min_by(|&x, &y| (first[x].distance + last[x].distance).total_cmp(&(first[y].distance + last[y].distance))).expect("candidates");
         let chord = [first[k].distance + eps, last[k].distance + eps];
         // A candidate whose lower line stays above that chord is never the closest on the piece:
         // drop it (from the bounds, and from the point queries on this segment).
-        let keep: Vec<bool> = lines.iter().map(|(v, slope)| !(*v > chord[0] && v + slope * piece > chord[1])).collect();
-        let mut j = 0;
-        cache.candidates.retain(|_| {
-            j += 1;
-            keep[j - 1]
-        });
+        let keep: Few<bool> = lines.iter().map(|(v, slope)| !(*v > chord[0] && v + slope * piece > chord[1])).collect();
+        retain_flagged(&mut cache.candidates, &keep);
         let (first, last) = (retained(first, &keep), retained(last, &keep));
         let lines = retained(lines, &keep);
         let a_at = |s: f64| lines.iter().map(|(v, k)| v + k * s).fold(f64::INFINITY, f64::min);
@@ -519,7 +447,7 @@ impl MeanSurface for TriangleMesh {
         let cos = [(cos[0] - 1e-12).clamp(-1.0, 1.0), (cos[1] + 1e-12).clamp(-1.0, 1.0)];
         let pad = |v: [f64; 2], by: f64| [v[0] + by, v[1] + by];
         let end = self.surface_point(p + piece * d, &closest_of(&last));
-        Ok(SegmentBound { length: piece, f_lo: pad(f_lo, -4.0 * eps), f_hi: pad(f_hi, 4.0 * eps), cos, end: Some(end) })
+        Ok(SegmentBound { length: piece, f_lo: pad(f_lo, -PAD * eps), f_hi: pad(f_hi, PAD * eps), cos, end: Some(end) })
     }
 
     fn bounding_box(&self) -> Aabb {
@@ -542,97 +470,4 @@ fn dpdu(p: &[DVec3; 3], n: DVec3, uv: Option<[DVec2; 3]>) -> DVec3 {
         return DVec3::ZERO;
     }
     n.any_orthonormal_pair().0
-}
-
-/// The order of closest points: by distance, ties (points on a medial surface) to the smaller
-/// triangle index, so that every search returns the same triangle, hence the same frame.
-fn closer(a: &Closest, b: &Closest) -> bool {
-    a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.triangle < b.triangle)
-}
-
-fn box_distance_sq(node: &Node, p: DVec3) -> f64 {
-    let q = p.clamp(node.min, node.max);
-    (p - q).length_squared()
-}
-
-/// Fills node `slot` with the hierarchy over `order[first..first + count]`: median splits of the
-/// centroids along the longest axis of their bounds, children allocated in pairs.
-fn build(nodes: &mut Vec<Node>, triangles: &[Triangle], centroids: &[DVec3], order: &mut [u32], slot: usize, first: usize, count: usize) {
-    let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (mut cmin, mut cmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for &i in &order[first..first + count] {
-        for v in triangles[i as usize].p {
-            min = min.min(v);
-            max = max.max(v);
-        }
-        cmin = cmin.min(centroids[i as usize]);
-        cmax = cmax.max(centroids[i as usize]);
-    }
-    if count <= LEAF_SIZE {
-        nodes[slot] = Node { min, max, first: first as u32, count: count as u32 };
-        return;
-    }
-    let extent = cmax - cmin;
-    let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
-    let half = count / 2;
-    order[first..first + count].select_nth_unstable_by(half, |&a, &b| centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]));
-    let left = nodes.len();
-    nodes.extend([Node { min, max, first: 0, count: 0 }; 2]);
-    nodes[slot] = Node { min, max, first: left as u32, count: 0 };
-    build(nodes, triangles, centroids, order, left, first, half);
-    build(nodes, triangles, centroids, order, left + 1, first + half, count - half);
-}
-
-/// The closest point of triangle `t` to `p` (Ericson, *Real-Time Collision Detection*, 5.1.5),
-/// with its barycentric coordinates and feature. A degenerate triangle is treated as its edges.
-fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest {
-    let [a, b, c] = t.p;
-    let make = |point: DVec3, bary: DVec3, feature: Feature| Closest { triangle: index, point, barycentric: bary, feature, distance_sq: (p - point).length_squared() };
-    if t.n == DVec3::ZERO {
-        return (0..3)
-            .map(|i| {
-                let (u, v) = (t.p[i], t.p[(i + 1) % 3]);
-                let e = v - u;
-                let s = if e.length_squared() > 0.0 { ((p - u).dot(e) / e.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-                let mut bary = DVec3::ZERO;
-                bary[i] = 1.0 - s;
-                bary[(i + 1) % 3] = s;
-                make(u + s * e, bary, Feature::Edge(i))
-            })
-            .min_by(|x, y| x.distance_sq.total_cmp(&y.distance_sq))
-            .expect("three edges");
-    }
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return make(a, DVec3::X, Feature::Vertex(0));
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return make(b, DVec3::Y, Feature::Vertex(1));
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return make(a + v * ab, DVec3::new(1.0 - v, v, 0.0), Feature::Edge(0));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return make(c, DVec3::Z, Feature::Vertex(2));
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return make(a + w * ac, DVec3::new(1.0 - w, 0.0, w), Feature::Edge(2));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return make(b + w * (c - b), DVec3::new(0.0, 1.0 - w, w), Feature::Edge(1));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    make(a + ab * v + ac * w, DVec3::new(1.0 - v - w, v, w), Feature::Face)
 }

@@ -1,0 +1,154 @@
+//! A narrow-band grid of candidate lists: for every cell near the surface, the triangles that
+//! can be closest to some point of the cell. Most queries of a thin shell fall into such a cell,
+//! where the closest point is found among a handful of triangles instead of by a hierarchy
+//! search, and a segment's candidates are the union of the lists of the cells it crosses.
+//!
+//! A cell's list: with `c` its centre, `r` its half diagonal and `d` the distance from `c` to the
+//! mesh, every point `x` of the cell has its closest triangle within `d + r` of `x`, hence within
+//! `d + 2r` of `c`; the list holds every triangle within that distance (with a relative margin for
+//! rounding, so it also serves points a hair outside the cell).
+
+use super::bvh::Bvh;
+use super::triangle::{closest_among, Closest, Triangle};
+use glam::{DVec3, IVec3};
+
+/// Cells whose centre is farther than this many cells from the surface get no list (queries
+/// there use the hierarchy).
+const BAND_CELLS: f64 = 1.5;
+/// Fine cells per edge of the blocks that the build skips wholesale.
+const BLOCK: i32 = 4;
+/// The most cells; beyond, the cells grow.
+const MAX_CELLS: f64 = 2.0e6;
+/// Longer lists are dropped (queries there use the hierarchy).
+const MAX_LIST: usize = 32;
+
+#[derive(Clone, Debug)]
+pub(super) struct CellGrid {
+    origin: DVec3,
+    h: f64,
+    dims: IVec3,
+    /// `lists[offsets[i]..offsets[i + 1]]` is cell `i`'s list; empty outside the band.
+    offsets: Vec<u32>,
+    lists: Vec<u32>,
+}
+
+impl CellGrid {
+    /// The grid over the mesh's bounds (`min`, `max`) with cells of about `cell`.
+    pub fn build(bvh: &Bvh, triangles: &[Triangle], min: DVec3, max: DVec3, cell: f64) -> CellGrid {
+        let extent = max - min;
+        let h = cell.max((extent.x * extent.y * extent.z / MAX_CELLS).cbrt()).max(1e-12 * extent.max_element());
+        let band = BAND_CELLS * h;
+        let origin = min - DVec3::splat(band + h);
+        let dims = (((max - min) + 2.0 * (band + h)) / (h * BLOCK as f64)).ceil().as_ivec3().max(IVec3::ONE) * BLOCK;
+        let count = (dims.x as usize) * (dims.y as usize) * (dims.z as usize);
+        let half_diagonal = 0.5 * 3f64.sqrt() * h;
+        let block_half_diagonal = half_diagonal * BLOCK as f64;
+        let mut lists_of: Vec<Vec<u32>> = vec![Vec::new(); count];
+        let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
+        let mut scratch = Vec::new();
+        let blocks = dims / BLOCK;
+        for bz in 0..blocks.z {
+            for by in 0..blocks.y {
+                for bx in 0..blocks.x {
+                    let first = IVec3::new(bx, by, bz) * BLOCK;
+                    let block_centre = origin + (first.as_dvec3() + 0.5 * BLOCK as f64) * h;
+                    let d_block = bvh.closest(triangles, block_centre).distance_sq.sqrt();
+                    if d_block - block_half_diagonal > band {
+                        continue; // no cell centre of the block is within the band
+                    }
+                    for z in 0..BLOCK {
+                        for y in 0..BLOCK {
+                            for x in 0..BLOCK {
+                                let c = first + IVec3::new(x, y, z);
+                                let centre = origin + (c.as_dvec3() + 0.5) * h;
+                                let d = bvh.closest(triangles, centre).distance_sq.sqrt();
+                                if d > band {
+                                    continue;
+                                }
+                                let reach = (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
+                                if bvh.within(triangles, centre, reach, MAX_LIST, &mut scratch) {
+                                    lists_of[index(c)] = std::mem::take(&mut scratch);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let mut offsets = Vec::with_capacity(count + 1);
+        let mut lists = Vec::new();
+        offsets.push(0);
+        for l in &lists_of {
+            lists.extend_from_slice(l);
+            offsets.push(lists.len() as u32);
+        }
+        CellGrid { origin, h, dims, offsets, lists }
+    }
+
+    fn cell_of(&self, p: DVec3) -> Option<IVec3> {
+        let c = ((p - self.origin) / self.h).floor();
+        (c.cmpge(DVec3::ZERO).all() && c.cmplt(self.dims.as_dvec3()).all()).then(|| c.as_ivec3())
+    }
+
+    fn list(&self, c: IVec3) -> &[u32] {
+        let i = ((c.z * self.dims.y + c.y) * self.dims.x + c.x) as usize;
+        &self.lists[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// The closest point to `p` when `p` lies in a cell of the band.
+    pub fn closest(&self, triangles: &[Triangle], p: DVec3) -> Option<Closest> {
+        let list = self.list(self.cell_of(p)?);
+        (!list.is_empty()).then(|| closest_among(triangles, p, list))
+    }
+
+    /// The union of the lists of every cell the segment `p + s d`, `s ∈ [0, length]`, crosses
+    /// (3-D DDA, Amanatides & Woo 1987), or `false` when it leaves the band.
+    pub fn segment(&self, p: DVec3, d: DVec3, length: f64, out: &mut Vec<u32>) -> bool {
+        out.clear();
+        let Some(mut c) = self.cell_of(p) else { return false };
+        let step = IVec3::new(sign(d.x), sign(d.y), sign(d.z));
+        let rel = (p - self.origin) / self.h;
+        // Parameter of the next cell boundary along each axis, and between boundaries.
+        let mut next = DVec3::ZERO;
+        let mut delta = DVec3::ZERO;
+        for a in 0..3 {
+            if step[a] == 0 {
+                next[a] = f64::INFINITY;
+                delta[a] = f64::INFINITY;
+            } else {
+                let boundary = if step[a] > 0 { c[a] as f64 + 1.0 } else { c[a] as f64 };
+                next[a] = (boundary - rel[a]) * self.h / d[a];
+                delta[a] = self.h / d[a].abs();
+            }
+        }
+        loop {
+            let list = self.list(c);
+            if list.is_empty() {
+                return false;
+            }
+            out.extend_from_slice(list);
+            let a = if next.x <= next.y && next.x <= next.z { 0 } else if next.y <= next.z { 1 } else { 2 };
+            if next[a] > length {
+                break;
+            }
+            c[a] += step[a];
+            if c[a] < 0 || c[a] >= self.dims[a] {
+                return false;
+            }
+            next[a] += delta[a];
+        }
+        out.sort_unstable();
+        out.dedup();
+        true
+    }
+}
+
+fn sign(x: f64) -> i32 {
+    if x > 0.0 {
+        1
+    } else if x < 0.0 {
+        -1
+    } else {
+        0
+    }
+}

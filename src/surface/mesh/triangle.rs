@@ -1,0 +1,123 @@
+//! One triangle of a mesh surface and its closest point to a query point (Ericson, *Real-Time
+//! Collision Detection*, 5.1.5), with the feature (face, edge, corner) the point lies on, which
+//! decides the pseudo-normal that signs the distance (Bærentzen & Aanæs 2005).
+
+use glam::DVec3;
+
+/// Where on a triangle the closest point lies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Feature {
+    Face,
+    /// Edge `i` runs from corner `i` to corner `(i + 1) % 3`.
+    Edge(usize),
+    Vertex(usize),
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct Triangle {
+    pub p: [DVec3; 3],
+    /// Unit face normal from the winding; zero for a degenerate (zero-area) triangle.
+    pub n: DVec3,
+    /// Pseudo-normals of the edges (sum of the adjacent faces' normals) and of the corners
+    /// (angle-weighted), for the sign of the distance.
+    pub edge_pn: [DVec3; 3],
+    pub vertex_pn: [DVec3; 3],
+    /// Vertex (shading) normals, when the mesh has them.
+    pub shading: Option<[DVec3; 3]>,
+    /// A lower bound of `|Σ b_i n_i|` over the triangle's barycentric coordinates (0: none).
+    pub shading_min_length: f64,
+    /// A Lipschitz constant of `c ↦ Σ b_i(c) n_i` over the triangle (per unit of distance).
+    pub shading_lipschitz: f64,
+    /// Mitsuba's `dp/du` for this triangle.
+    pub dpdu: DVec3,
+    /// A bounding sphere (centre, radius): a cheap lower bound of the distance.
+    pub centre: DVec3,
+    pub radius: f64,
+}
+
+/// The closest point of a triangle to a query point.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Closest {
+    pub triangle: u32,
+    pub point: DVec3,
+    pub barycentric: DVec3,
+    pub feature: Feature,
+    pub distance_sq: f64,
+}
+
+impl Closest {
+    /// The starting value of a search: nothing found yet.
+    pub const NONE: Closest = Closest { triangle: u32::MAX, point: DVec3::ZERO, barycentric: DVec3::ZERO, feature: Feature::Face, distance_sq: f64::INFINITY };
+}
+
+/// The order of closest points: by distance, ties (points on a medial surface) to the smaller
+/// triangle index, so that every search returns the same triangle, hence the same frame.
+pub(super) fn closer(a: &Closest, b: &Closest) -> bool {
+    a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.triangle < b.triangle)
+}
+
+/// The closest point among `candidates`, by [`closer`].
+pub(super) fn closest_among(triangles: &[Triangle], p: DVec3, candidates: &[u32]) -> Closest {
+    let mut best = Closest::NONE;
+    for &i in candidates {
+        let c = closest_on_triangle(&triangles[i as usize], p, i);
+        if closer(&c, &best) {
+            best = c;
+        }
+    }
+    best
+}
+
+/// The closest point of triangle `t` (index `index`) to `p`. A degenerate triangle is treated
+/// as its three edges.
+pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest {
+    let [a, b, c] = t.p;
+    let make = |point: DVec3, bary: DVec3, feature: Feature| Closest { triangle: index, point, barycentric: bary, feature, distance_sq: (p - point).length_squared() };
+    if t.n == DVec3::ZERO {
+        return (0..3)
+            .map(|i| {
+                let (u, v) = (t.p[i], t.p[(i + 1) % 3]);
+                let e = v - u;
+                let s = if e.length_squared() > 0.0 { ((p - u).dot(e) / e.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+                let mut bary = DVec3::ZERO;
+                bary[i] = 1.0 - s;
+                bary[(i + 1) % 3] = s;
+                make(u + s * e, bary, Feature::Edge(i))
+            })
+            .min_by(|x, y| x.distance_sq.total_cmp(&y.distance_sq))
+            .expect("three edges");
+    }
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return make(a, DVec3::X, Feature::Vertex(0));
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return make(b, DVec3::Y, Feature::Vertex(1));
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return make(a + v * ab, DVec3::new(1.0 - v, v, 0.0), Feature::Edge(0));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return make(c, DVec3::Z, Feature::Vertex(2));
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return make(a + w * ac, DVec3::new(1.0 - w, 0.0, w), Feature::Edge(2));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return make(b + w * (c - b), DVec3::new(0.0, 1.0 - w, w), Feature::Edge(1));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    make(a + ab * v + ac * w, DVec3::new(1.0 - v - w, v, w), Feature::Face)
+}

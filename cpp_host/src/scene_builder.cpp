@@ -285,30 +285,46 @@ private:
         if (t == "obj" || t == "ply") {
             std::string path = resolve_file(o, "filename");
             bool face_normals = o.get_bool("face_normals", false);
-            if (t == "obj") o.get_bool("flip_tex_coords", true);  // accepted, no textures
+            bool flip_tc = t == "obj" && o.get_bool("flip_tex_coords", true);
             TriMesh m;
             try {
                 m = t == "obj" ? load_obj(path) : load_ply(path);
             } catch (const Error& e) {
                 throw Error(o.loc, o.describe() + ": " + e.what());
             }
+            if (flip_tc)  // Mitsuba's OBJ loader: v -> 1 - v unless flip_tex_coords is false
+                for (Vec2& q : m.uv) q.y = 1.0f - q.y;
             if (face_normals) m.make_face_normals();
             m.transform(to_world);
             if (!face_normals && m.n.empty()) m.compute_vertex_normals();
             if (flip) m.flip_normals();
-            shape = std::make_shared<MeshShape>(std::move(m), t);
+            shape = std::make_shared<MeshShape>(std::move(m), t, flip);
         } else if (t == "sphere") {
             Vec3 c = o.get_point("center", Vec3(0.0f));
             float r = o.get_float("radius", 1.0f);
             if (!(r > 0)) throw perr(o, "radius", "must be positive");
             double s = to_world.similarity_scale(1e-4);
             if (s < 0) throw perr(o, "to_world", "of a sphere must be a similarity (rotation, uniform scale, translation)");
-            shape = std::make_shared<SphereShape>(to_world.point(c), float(r * s), flip);
+            Mat4 rot = to_world * Mat4::scale(1.0 / s, 1.0 / s, 1.0 / s);  // object frame for uv, dp/du
+            rot.m[0][3] = rot.m[1][3] = rot.m[2][3] = 0.0;
+            shape = std::make_shared<SphereShape>(to_world.point(c), float(r * s), flip, rot);
         } else if (t == "rectangle" || t == "cube" || t == "disk") {
             TriMesh m = t == "rectangle" ? make_rectangle_mesh() : (t == "cube" ? make_cube_mesh() : make_disk_mesh());
             m.transform(to_world);
             if (flip) m.flip_normals();
-            auto ms = std::make_shared<MeshShape>(std::move(m), t);
+            auto ms = std::make_shared<MeshShape>(std::move(m), t, flip);
+            if (t == "disk") {
+                // Mitsuba's disk: uv = (r, phi / 2 pi), dp/du = to_world * (cos phi, sin phi, 0)
+                Mat4 inv = to_world.inverse();
+                ms->set_parameterization([=](const Vec3& p, Vec2* uv, Vec3* dpdu) {
+                    Vec3 l = inv.point(p);
+                    float r = std::sqrt(l.x * l.x + l.y * l.y);
+                    float v = std::atan2(l.y, l.x) * (0.5f * kInvPi);
+                    if (v < 0) v += 1.0f;
+                    *uv = Vec2(r, v);
+                    *dpdu = to_world.vector(r > 0 ? Vec3(l.x / r, l.y / r, 0.0f) : Vec3(1, 0, 0));
+                });
+            }
             double s = to_world.similarity_scale(1e-4);
             if (s > 0) {
                 Mat4 inv = to_world.inverse();

@@ -147,10 +147,14 @@ int mfrender_main(int argc, char** argv) {
             if (::stat(d.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
                 throw Error("output directory \"" + d + "\" does not exist");
         }
-        ParsedScene parsed = parse_scene_file(scene_path, defines);
+        // Every problem of the file is reported in one run: the reader's and the builder's.
+        ErrorSink problems;
+        ParsedScene parsed = parse_scene_file(scene_path, defines, &problems);
         bopts.allow_macrofacet_placeholders = false;  // --check validates macrofacet parameters too
         BuildReport report;
-        std::unique_ptr<Scene> scene = build_scene(parsed, bopts, &report);
+        std::unique_ptr<Scene> scene;
+        if (parsed.root) scene = build_scene(parsed, bopts, &report, &problems);
+        problems.raise();
         if (check) {
             SceneSummary s = scene->summary();
             std::printf("%s: OK: %zu shapes (%zu triangles), %zu emitters, %zu media, %dx%d, %d spp, %s\n",
@@ -191,6 +195,9 @@ int mfrender_main(int argc, char** argv) {
                          scene->spp, stats.seconds, stats.seconds > 0 ? double(stats.samples) / stats.seconds * 1e-6 : 0.0,
                          out_path.c_str(), png_path.c_str());
         return 0;
+    } catch (const ErrorList& list) {
+        for (const Error& e : list.errors()) std::fprintf(stderr, "mfrender: error: %s\n", e.what());
+        std::fprintf(stderr, "mfrender: %zu problems\n", list.errors().size());
     } catch (const Error& e) {
         std::fprintf(stderr, "mfrender: error: %s\n", e.what());
     } catch (const std::bad_alloc&) {

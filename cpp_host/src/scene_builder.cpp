@@ -22,39 +22,37 @@ class Builder {
 public:
     Builder(const BuildOptions& opts, BuildReport* report) : opts_(opts), report_(report) {}
 
-    std::unique_ptr<Scene> build(const ParsedScene& parsed) {
+    /// Builds everything it can and reports every problem to `errors` (one per object at least:
+    /// an object with a problem is skipped, and objects already reported by the reader, marked
+    /// broken, are skipped quietly). Returns null when there was any problem.
+    std::unique_ptr<Scene> build(const ParsedScene& parsed, ErrorSink& errors) {
         scene_ = std::make_unique<Scene>();
         const SceneObject& root = *parsed.root;
         const SceneObject* sensor = nullptr;
         const SceneObject* integrator = nullptr;
+        bool sensor_seen = false;
         for (const Child& c : root.children) {
             c.used = true;
             const SceneObject& o = *c.obj;
-            if (o.tag == "shape") {
-                build_shape(c.obj);
-            } else if (o.tag == "emitter") {
-                if (o.type == "area")
-                    throw Error(o.loc, o.describe() + ": an area emitter must be nested inside a <shape>");
-                scene_->add_emitter(build_emitter(o, nullptr));
-            } else if (o.tag == "bsdf") {
-                build_bsdf(o);
-            } else if (o.tag == "medium") {
-                build_medium(o);
-            } else if (o.tag == "sensor") {
-                if (sensor) throw Error(o.loc, "only one <sensor> is supported (first at " + sensor->loc.str() + ")");
-                sensor = &o;
-            } else if (o.tag == "integrator") {
-                if (integrator)
-                    throw Error(o.loc, "only one <integrator> is supported (first at " + integrator->loc.str() + ")");
-                integrator = &o;
-            } else {
-                throw Error(o.loc, o.describe() + " is not allowed at the top level of <scene>");
+            if (o.tag == "sensor") sensor_seen = true;
+            try {
+                build_top_level(o, c, &sensor, &integrator);
+            } catch (const AlreadyReported&) {
+            } catch (const Error& e) {
+                errors.add(e);
             }
         }
-        if (!sensor) throw Error(root.loc, "the scene has no <sensor> (mfrender needs a perspective sensor)");
-        build_sensor(*sensor);
-        if (integrator) build_integrator(*integrator);
-        else scene_->integrator = IntegratorSettings{false, -1, 5, false};  // Mitsuba's default: path
+        if (!sensor && !sensor_seen && !root.broken)
+            errors.add(Error(root.loc, "the scene has no <sensor> (mfrender needs a perspective sensor)"));
+        try {
+            if (sensor) build_sensor(*sensor);
+            if (integrator) build_integrator(*integrator);
+            else scene_->integrator = IntegratorSettings{false, -1, 5, false};  // Mitsuba's default: path
+        } catch (const AlreadyReported&) {
+        } catch (const Error& e) {
+            errors.add(e);
+        }
+        if (!errors.empty() || !sensor) return nullptr;
         if (opts_.spp_override > 0) scene_->spp = opts_.spp_override;
         if (opts_.seed_override >= 0) scene_->seed = uint64_t(opts_.seed_override);
         if (opts_.max_depth_override >= -1) scene_->integrator.max_depth = opts_.max_depth_override;
@@ -64,6 +62,40 @@ public:
     }
 
 private:
+    /// Thrown for an object whose problem the reader already reported (SceneObject::broken).
+    struct AlreadyReported {};
+    static void skip_if_broken(const SceneObject& o) {
+        if (o.broken) throw AlreadyReported{};
+    }
+
+    void build_top_level(const SceneObject& o, const Child& c, const SceneObject** sensor, const SceneObject** integrator) {
+        {
+            if (o.tag == "shape") {
+                build_shape(c.obj);
+            } else if (o.tag == "emitter") {
+                // A top-level area emitter is built by the shape that references it (Mitsuba's
+                // cbox): nothing to do here.
+                if (o.type != "area") scene_->add_emitter(build_emitter(o, nullptr));
+            } else if (o.tag == "bsdf") {
+                build_bsdf(o);
+            } else if (o.tag == "medium") {
+                build_medium(o);
+            } else if (o.tag == "sensor") {
+                skip_if_broken(o);
+                if (*sensor) throw Error(o.loc, "only one <sensor> is supported (first at " + (*sensor)->loc.str() + ")");
+                *sensor = &o;
+            } else if (o.tag == "integrator") {
+                skip_if_broken(o);
+                if (*integrator)
+                    throw Error(o.loc, "only one <integrator> is supported (first at " + (*integrator)->loc.str() + ")");
+                *integrator = &o;
+            } else {
+                (void)c;
+                throw Error(o.loc, o.describe() + " is not allowed at the top level of <scene>");
+            }
+        }
+    }
+
     const BuildOptions& opts_;
     BuildReport* report_;
     std::unique_ptr<Scene> scene_;
@@ -77,9 +109,8 @@ private:
     }
 
     std::string resolve_file(const SceneObject& o, const std::string& prop) {
-        std::string f = o.get_string(prop);
-        std::string path = (f.empty() || f[0] == '/' || o.dir == ".") ? f : o.dir + "/" + f;
-        if (!file_exists(path)) throw perr(o, prop, "refers to a missing file \"" + path + "\"");
+        std::string path = o.resolve_path(o.get_string(prop));
+        if (!file_exists(path)) throw perr(o, prop, "refers to a missing file " + quote(path, 200));
         return path;
     }
 
@@ -93,6 +124,7 @@ private:
     std::shared_ptr<Bsdf> build_bsdf(const SceneObject& o) {
         auto it = bsdfs_.find(&o);
         if (it != bsdfs_.end()) return it->second;
+        skip_if_broken(o);
         std::shared_ptr<Bsdf> b;
         const std::string& t = o.type;
         if (t == "diffuse") {
@@ -189,6 +221,7 @@ private:
 
     // ------------------------------------------------------------------ media
     std::shared_ptr<PhaseFunction> build_phase(const SceneObject& o) {
+        skip_if_broken(o);
         std::shared_ptr<PhaseFunction> ph;
         if (o.type == "isotropic") {
             ph = std::make_shared<IsotropicPhase>();
@@ -208,6 +241,7 @@ private:
     std::shared_ptr<const MediumParamBag> build_bag(const SceneObject& o) {
         auto it = bags_.find(&o);
         if (it != bags_.end()) return it->second;
+        skip_if_broken(o);
         auto bag = std::make_shared<MediumParamBag>();
         bag->type = o.type;
         bag->id = o.id;
@@ -256,6 +290,7 @@ private:
         }
         auto it = media_.find(&o);
         if (it != media_.end()) return it->second;
+        skip_if_broken(o);
         if (o.type != "homogeneous")
             throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, macrofacet, gpis)");
         Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
@@ -277,6 +312,7 @@ private:
     // ------------------------------------------------------------------ shapes
     void build_shape(const std::shared_ptr<SceneObject>& op) {
         const SceneObject& o = *op;
+        skip_if_broken(o);
         const std::string& t = o.type;
         Mat4 to_world = o.get_transform("to_world", Mat4());
         if (std::fabs(to_world.det3()) < 1e-30) throw perr(o, "to_world", "is singular");
@@ -413,6 +449,7 @@ private:
 
     // ------------------------------------------------------------------ emitters
     std::shared_ptr<Emitter> build_emitter(const SceneObject& o, const Shape* shape) {
+        skip_if_broken(o);
         std::shared_ptr<Emitter> e;
         const std::string& t = o.type;
         if (t == "area") {
@@ -459,10 +496,28 @@ private:
         if (o.type != "perspective") throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective)");
         Camera& cam = scene_->camera;
         cam.to_world = o.get_transform("to_world", Mat4());
-        if (!o.has("fov")) throw err(o, "missing required parameter \"fov\" (focal_length is not supported)");
-        float fov = o.get_float("fov");
-        if (!(fov > 0 && fov < 180)) throw perr(o, "fov", "must lie in (0, 180) degrees");
-        std::string axis = o.get_string("fov_axis", "x");
+        // Mitsuba's parse_fov: fov along fov_axis, or a focal length on 35 mm film (36 x 24 mm),
+        // i.e. a diagonal fov of 2 atan(sqrt(36^2 + 24^2) / (2 f)); default focal_length 50mm.
+        if (o.has("fov") && o.has("focal_length")) throw err(o, "specify either fov or focal_length, not both");
+        float fov;
+        std::string axis;
+        if (o.has("fov")) {
+            fov = o.get_float("fov");
+            if (!(fov > 0 && fov < 180)) throw perr(o, "fov", "must lie in (0, 180) degrees");
+            axis = o.get_string("fov_axis", "x");
+        } else {
+            std::string fl = o.get_string("focal_length", "50mm");
+            std::string num = fl.size() > 2 && fl.compare(fl.size() - 2, 2, "mm") == 0 ? fl.substr(0, fl.size() - 2) : fl;
+            char* end = nullptr;
+            double f = std::strtod(num.c_str(), &end);
+            if (num.empty() || *end || !(f > 0) || !std::isfinite(f))
+                throw perr(o, "focal_length", "must be a positive length in mm such as \"50mm\", got " + quote(fl));
+            fov = float(2.0 * std::atan(std::sqrt(36.0 * 36.0 + 24.0 * 24.0) / (2.0 * f)) * 180.0 / 3.14159265358979323846);
+            axis = "diagonal";
+            if (o.has("fov_axis")) o.get_string("fov_axis", "x");  // Mitsuba ignores it with focal_length
+        }
+        // Mitsuba's perspective (pinhole) reads and ignores focus_distance (only thinlens uses it)
+        if (!(o.get_float("focus_distance", 1.0f) > 0)) throw perr(o, "focus_distance", "must be positive");
         cam.near_clip = o.get_float("near_clip", 1e-2f);
         cam.far_clip = o.get_float("far_clip", 1e4f);
         if (!(cam.near_clip > 0 && cam.far_clip > cam.near_clip)) throw err(o, "needs 0 < near_clip < far_clip");
@@ -488,9 +543,20 @@ private:
             if (rf.size() > 1) throw Error(f.loc, f.describe() + ": more than one rfilter");
             if (!rf.empty()) {
                 const SceneObject& r = *rf[0]->obj;
-                if (r.type == "gaussian") r.get_float("stddev", 0.5f);  // rendered as a box filter
-                else if (r.type != "box")
-                    throw Error(r.loc, r.describe() + ": unsupported reconstruction filter (supported: box, gaussian=box)");
+                skip_if_broken(r);
+                if (r.type == "gaussian") {
+                    float sd = r.get_float("stddev", 0.5f);
+                    if (!(sd > 0 && sd <= 16)) throw perr(r, "stddev", "must lie in (0, 16] pixels");
+                    scene_->filter = ReconstructionFilter::gaussian(sd);
+                } else if (r.type == "tent") {
+                    float rad = r.get_float("radius", 1.0f);
+                    if (!(rad > 0 && rad <= 64)) throw perr(r, "radius", "must lie in (0, 64] pixels");
+                    scene_->filter = ReconstructionFilter::tent(rad);
+                } else if (r.type == "box") {
+                    scene_->filter = ReconstructionFilter::box();
+                } else {
+                    throw Error(r.loc, r.describe() + ": unsupported reconstruction filter (supported: gaussian, tent, box)");
+                }
                 r.check_all_used();
             }
             f.check_all_used();
@@ -556,9 +622,14 @@ private:
 
 }  // namespace
 
-std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report) {
+std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report,
+                                   ErrorSink* errors) {
     Builder b(opts, report);
-    return b.build(parsed);
+    ErrorSink local;
+    std::unique_ptr<Scene> scene = b.build(parsed, errors ? *errors : local);
+    local.raise();
+    if (!scene && errors && errors->empty()) throw Error("the scene could not be built");
+    return scene;
 }
 
 const char* supported_subset_text() {

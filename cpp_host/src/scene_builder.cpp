@@ -57,6 +57,7 @@ public:
         if (opts_.seed_override >= 0) scene_->seed = uint64_t(opts_.seed_override);
         if (opts_.max_depth_override >= -1) scene_->integrator.max_depth = opts_.max_depth_override;
         for (auto& kv : media_) scene_->media.push_back(kv.second);
+        scene_->content_hash = parsed.content_hash;
         scene_->commit();
         return std::move(scene_);
     }

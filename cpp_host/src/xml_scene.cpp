@@ -293,6 +293,8 @@ public:
         search_path_->push_back(ctx.dir);
         out.root->search_path = search_path_;
         total_bytes_ = text.size();
+        hash(text);
+        for (const auto& kv : params_) hash(kv.first + "=" + kv.second + "\n");
         if (text.size() > XmlLimits::kMaxFileBytes) {
             errors_.add(Error(out.root->loc, "scene file is " + std::to_string(text.size()) + " bytes, more than the limit of " +
                                                  std::to_string(XmlLimits::kMaxFileBytes)));
@@ -321,6 +323,7 @@ public:
         parse_children(ctx, root, *out.root, 1, true);
         resolve_refs();
         check_graph_depth(*out.root);
+        out.content_hash = hash_;
         return out;
     }
 
@@ -334,6 +337,10 @@ private:
     std::shared_ptr<std::vector<std::string>> search_path_;
     size_t total_bytes_ = 0;
     bool upgrade_ = false;  // current file is pre-2.0.0
+    uint64_t hash_ = 0xcbf29ce484222325ull;
+    void hash(const std::string& s) {  // FNV-1a 64
+        for (unsigned char c : s) hash_ = (hash_ ^ c) * 0x100000001b3ull;
+    }
 
     static std::string clip(const std::string& s) { return s.size() <= 64 ? s : s.substr(0, 64) + "..."; }
 
@@ -712,6 +719,7 @@ private:
         FileCtx sub{file, dirname_of(file), read_xml_file(file, std::min(budget, XmlLimits::kMaxFileBytes), where, "<include>"),
                     {}, ctx.include_depth + 1};
         total_bytes_ += sub.text.size();
+        hash(sub.text);
         sub.index_lines();
         pugi::xml_document doc;
         if (!load(sub, doc)) {

@@ -105,6 +105,7 @@ struct ParsedScene {
     std::string main_file;
     std::string version;
     bool upgraded = false;  // a pre-2.0.0 scene upgraded in memory (camelCase names etc.)
+    uint64_t content_hash = 0;  // FNV-1a of every XML file read and the -D values (shard checks)
 };
 
 using Defines = std::vector<std::pair<std::string, std::string>>;

@@ -218,7 +218,7 @@ std::string dirname_of(const std::string& path) {
 /// or an endless pipe is refused before anything is read).
 std::string read_xml_file(const std::string& path, size_t max_bytes, const SourceLoc& where, const char* what) {
     struct stat st;
-    if (::stat(path.c_str(), &st) != 0) throw Error(where, std::string(what) + ": cannot read file " + quote(path, 200));
+    if (::stat(path.c_str(), &st) != 0) throw Error(where, std::string(what) + ": no such file " + quote(path, 200));
     if (!S_ISREG(st.st_mode))
         throw Error(where, std::string(what) + ": " + quote(path, 200) + " is not a regular file");
     if (size_t(st.st_size) > max_bytes)
@@ -301,6 +301,7 @@ public:
             return out;
         }
         pugi::xml_document doc;
+        out.root->broken = true;  // until the document is read: no consequential errors
         if (!load(ctx, doc)) return out;
         pugi::xml_node root = doc.document_element();
         if (std::string(root.name()) != "scene") {
@@ -319,6 +320,7 @@ public:
             errors_.add(e);
             return out;
         }
+        out.root->broken = false;
         include_stack_.push_back(path);
         parse_children(ctx, root, *out.root, 1, true);
         resolve_refs();
@@ -823,7 +825,7 @@ ParsedScene parse_scene_string(const std::string& xml, const std::string& virtua
 }
 
 ParsedScene parse_scene_file(const std::string& path, const Defines& cli_defines, ErrorSink* errors) {
-    std::string text = read_xml_file(path, XmlLimits::kMaxFileBytes, SourceLoc{}, "scene file");
+    std::string text = read_xml_file(path, XmlLimits::kMaxFileBytes, SourceLoc{}, "cannot read scene file");
     return parse_scene_string(text, path, cli_defines, errors);
 }
 

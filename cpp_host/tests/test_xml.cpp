@@ -91,7 +91,7 @@ TEST_CASE(transform_composition) {
 
     // rotate with value="axis" equals rotate with x/y/z; 120° about (1,1,1) permutes the axes x->y->z
     ParsedScene s4 = parse(R"(<shape type="sphere"><transform name="to_world">
-        <rotate value="1, 1, 1" angle="120"/></transform></shape>)");
+        <rotate value="0.57735026919, 0.57735026919, 0.57735026919" angle="120"/></transform></shape>)");
     Vec3 q = prop(*s4.root->children[0].obj, "to_world")->m.vector(Vec3(1, 0, 0));
     CHECK_NEAR(q.x, 0, 1e-6);
     CHECK_NEAR(q.y, 1, 1e-6);
@@ -131,11 +131,9 @@ TEST_CASE(parse_errors_name_element_and_line) {
                       "mem.xml:3: <transform>: unknown transform operation <shear>");
     CHECK_THROWS_WITH(parse("<shape type=\"sphere\"><transform name=\"to_world\">\n<matrix value=\"1 2 3\"/></transform></shape>"),
                       "mem.xml:3: <matrix>: expected 16");
-    CHECK_THROWS_WITH(parse("<bsdf type=\"diffuse\">\n<spectrum name=\"r\" value=\"400:0.1, 700:0.5\"/></bsdf>"), "only a single-valued <spectrum>");
-    CHECK_THROWS_WITH(parse_scene_string("<scene version=\"2.1.0\"/>", "v.xml", {}), "v.xml:1: unsupported scene version");
+    CHECK_THROWS_WITH(parse_scene_string("<scene version=\"4.0.0\"/>", "v.xml", {}), "v.xml:1: unsupported scene version");
     CHECK_THROWS_WITH(parse_scene_string("<scene/>", "v.xml", {}), "missing the \"version\" attribute");
-    CHECK_THROWS_WITH(parse("<texture type=\"bitmap\"/>"), "mem.xml:2: <texture> is not supported");
-    CHECK_THROWS_WITH(parse("<include filename=\"/nonexistent/x.xml\"/>"), "mem.xml:2: <include>: cannot read file");
+    CHECK_THROWS_WITH(parse("<include filename=\"/nonexistent/x.xml\"/>"), "mem.xml:2: <include>: no such file");
 }
 
 static std::unique_ptr<Scene> build(const std::string& body, bool placeholders = false, BuildReport* rep = nullptr) {

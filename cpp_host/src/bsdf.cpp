@@ -92,21 +92,21 @@ Rgb conductor_fresnel(const ConductorIor& ior, float cos_i) {
 
 class Diffuse final : public Bsdf {
 public:
-    explicit Diffuse(const Rgb& r) : r_(r) {}
-    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
+    explicit Diffuse(std::shared_ptr<const Texture> r) : r_(std::move(r)) {}
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
-        return r_ * (kInvPi * wi.z);
+        return r_->eval(uv) * (kInvPi * wi.z);
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         return wi.z * kInvPi;
     }
-    bool sample(const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         s->wi = cosine_hemisphere(u);
         if (s->wi.z <= 0) return false;
         s->pdf = s->wi.z * kInvPi;
-        s->weight = r_;
+        s->weight = r_->eval(uv);
         s->delta = false;
         s->transmission = false;
         s->eta = 1.0f;
@@ -115,19 +115,19 @@ public:
     std::string name() const override { return "diffuse"; }
 
 private:
-    Rgb r_;
+    std::shared_ptr<const Texture> r_;
 };
 
 class Conductor final : public Bsdf {
 public:
-    Conductor(const ConductorIor& ior, const Rgb& spec) : ior_(ior), spec_(spec) {}
-    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec3& wo, float, const Vec2&, BsdfSample* s) const override {
+    Conductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec) : ior_(ior), spec_(std::move(spec)) {}
+    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2&, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         s->wi = Vec3(-wo.x, -wo.y, wo.z);
         s->pdf = 1.0f;
-        s->weight = spec_ * conductor_fresnel(ior_, wo.z);
+        s->weight = spec_->eval(uv) * conductor_fresnel(ior_, wo.z);
         s->delta = true;
         s->transmission = false;
         s->eta = 1.0f;
@@ -138,29 +138,30 @@ public:
 
 private:
     ConductorIor ior_;
-    Rgb spec_;
+    std::shared_ptr<const Texture> spec_;
 };
 
 class RoughConductor final : public Bsdf {
 public:
-    RoughConductor(const ConductorIor& ior, const Rgb& spec, MicrofacetType t, float au, float av, bool vis, bool hc)
-        : ior_(ior), spec_(spec), mf_(t, au, av, vis, hc) {}
-    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
+    RoughConductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec, MicrofacetType t, float au, float av,
+                   bool vis, bool hc)
+        : ior_(ior), spec_(std::move(spec)), mf_(t, au, av, vis, hc) {}
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         Vec3 h = normalize(wo + wi);
         float D = mf_.D(h);
         if (D == 0) return Rgb(0.0f);
         float G = mf_.G(wo, wi, h);
-        return spec_ * conductor_fresnel(ior_, dot(wo, h)) * (D * G / (4.0f * wo.z));
+        return spec_->eval(uv) * conductor_fresnel(ior_, dot(wo, h)) * (D * G / (4.0f * wo.z));
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         Vec3 h = normalize(wo + wi);
         float d = dot(wo, h);
         if (d <= 0) return 0.0f;
         return mf_.pdf(wo, h) / (4.0f * d);
     }
-    bool sample(const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         float mpdf;
         Vec3 m = mf_.sample(wo, u, &mpdf);
@@ -172,7 +173,7 @@ public:
         s->wi = wi;
         s->pdf = mpdf / (4.0f * d);
         if (!(s->pdf > 0) || !std::isfinite(s->pdf)) return false;
-        s->weight = eval(wo, wi) / s->pdf;
+        s->weight = eval(uv, wo, wi) / s->pdf;
         s->delta = false;
         s->transmission = false;
         s->eta = 1.0f;
@@ -182,16 +183,16 @@ public:
 
 private:
     ConductorIor ior_;
-    Rgb spec_;
+    std::shared_ptr<const Texture> spec_;
     Microfacet mf_;
 };
 
 class Dielectric final : public Bsdf {
 public:
     Dielectric(float eta, const Rgb& r, const Rgb& t) : eta_(eta), r_(r), t_(t) {}
-    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
+    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec2&, const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
         if (wo.z == 0) return false;
         float cos_t;
         float F = fresnel_dielectric(wo.z, eta_, &cos_t);
@@ -223,9 +224,9 @@ private:
 
 class NullBsdf final : public Bsdf {
 public:
-    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec3&, float, const Vec2&, BsdfSample*) const override { return false; }
+    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec2&, const Vec3&, float, const Vec2&, BsdfSample*) const override { return false; }
     bool is_delta() const override { return true; }
     bool is_null() const override { return true; }
     std::string name() const override { return "null"; }
@@ -235,15 +236,15 @@ class TwoSided final : public Bsdf {
 public:
     TwoSided(std::shared_ptr<Bsdf> f, std::shared_ptr<Bsdf> b) : f_(std::move(f)), b_(std::move(b)) {}
     static Vec3 flip(const Vec3& v) { return Vec3(v.x, v.y, -v.z); }
-    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
-        return wo.z >= 0 ? f_->eval(wo, wi) : b_->eval(flip(wo), flip(wi));
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        return wo.z >= 0 ? f_->eval(uv, wo, wi) : b_->eval(uv, flip(wo), flip(wi));
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
-        return wo.z >= 0 ? f_->pdf(wo, wi) : b_->pdf(flip(wo), flip(wi));
+    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        return wo.z >= 0 ? f_->pdf(uv, wo, wi) : b_->pdf(uv, flip(wo), flip(wi));
     }
-    bool sample(const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
-        if (wo.z >= 0) return f_->sample(wo, ul, u, s);
-        if (!b_->sample(flip(wo), ul, u, s)) return false;
+    bool sample(const Vec2& uv, const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z >= 0) return f_->sample(uv, wo, ul, u, s);
+        if (!b_->sample(uv, flip(wo), ul, u, s)) return false;
         s->wi = flip(s->wi);
         return true;
     }
@@ -256,10 +257,13 @@ private:
 
 }  // namespace
 
-std::shared_ptr<Bsdf> make_diffuse(const Rgb& r) { return std::make_shared<Diffuse>(r); }
-std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, const Rgb& s) { return std::make_shared<Conductor>(ior, s); }
-std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, const Rgb& s, MicrofacetType t, float au, float av,
-                                           bool vis, bool hc) {
+std::shared_ptr<Bsdf> make_diffuse(const Rgb& r) { return std::make_shared<Diffuse>(make_constant_texture(r)); }
+std::shared_ptr<Bsdf> make_diffuse(std::shared_ptr<const Texture> r) { return std::make_shared<Diffuse>(std::move(r)); }
+std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> s) {
+    return std::make_shared<Conductor>(ior, std::move(s));
+}
+std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> s, MicrofacetType t,
+                                           float au, float av, bool vis, bool hc) {
     return std::make_shared<RoughConductor>(ior, s, t, au, av, vis, hc);
 }
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {

@@ -199,9 +199,9 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             EmitterSample es;
             if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0) {
                 Vec3 wi_l = frame.to_local(es.wi);
-                Rgb f = bsdf.eval(wo_l, wi_l);
+                Rgb f = bsdf.eval(hit.uv, wo_l, wi_l);
                 if (!f.is_black()) {
-                    float f_pdf = bsdf.pdf(wo_l, wi_l);
+                    float f_pdf = bsdf.pdf(hit.uv, wo_l, wi_l);
                     const Medium* m = medium;
                     if (vol && shape->is_medium_transition()) m = shape->target_medium(hit.ng, es.wi);
                     Vec3 o = offset_ray_origin(hit.p, hit.ng, es.wi);
@@ -217,7 +217,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         }
 
         BsdfSample bs;
-        if (!bsdf.sample(wo_l, sampler.next_1d(), sampler.next_2d(), &bs)) break;
+        if (!bsdf.sample(hit.uv, wo_l, sampler.next_1d(), sampler.next_2d(), &bs)) break;
         Vec3 wi = frame.to_world(bs.wi);
         beta *= bs.weight;
         if (beta.is_black() || !beta.finite()) break;

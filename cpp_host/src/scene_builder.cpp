@@ -77,6 +77,8 @@ private:
                 // A top-level area emitter is built by the shape that references it (Mitsuba's
                 // cbox): nothing to do here.
                 if (o.type != "area") scene_->add_emitter(build_emitter(o, nullptr));
+            } else if (o.tag == "texture") {
+                build_texture(o);
             } else if (o.tag == "bsdf") {
                 build_bsdf(o);
             } else if (o.tag == "medium") {
@@ -101,6 +103,7 @@ private:
     BuildReport* report_;
     std::unique_ptr<Scene> scene_;
     std::map<const SceneObject*, std::shared_ptr<Bsdf>> bsdfs_;
+    std::map<const SceneObject*, std::shared_ptr<const Texture>> textures_;
     std::map<const SceneObject*, std::shared_ptr<const Medium>> media_;
     std::map<const SceneObject*, std::shared_ptr<const MediumParamBag>> bags_;
 
@@ -129,10 +132,10 @@ private:
         std::shared_ptr<Bsdf> b;
         const std::string& t = o.type;
         if (t == "diffuse") {
-            b = make_diffuse(nonneg_rgb(o, "reflectance", Rgb(0.5f)));
+            b = make_diffuse(texture_param(o, "reflectance", Rgb(0.5f)));
         } else if (t == "conductor" || t == "roughconductor") {
             ConductorIor ior = conductor_ior(o);
-            Rgb spec = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f));
+            auto spec = texture_param(o, "specular_reflectance", Rgb(1.0f));
             if (t == "conductor") {
                 b = make_conductor(ior, spec);
             } else {
@@ -177,6 +180,58 @@ private:
         o.check_all_used();
         bsdfs_[&o] = b;
         return b;
+    }
+
+    // ------------------------------------------------------------------ textures
+    /// A parameter Mitsuba takes as a texture: a constant property (<rgb>, <float>, <spectrum>),
+    /// a nested <texture name="..."> or a <ref name="..." id="..."/> to a texture.
+    std::shared_ptr<const Texture> texture_param(const SceneObject& o, const std::string& name, const Rgb& def) {
+        const Child* c = o.child_named("texture", name);
+        if (c && o.has(name)) throw err(o, "parameter " + quote(name) + " is given twice (a value and a texture)");
+        if (c) return build_texture(*c->obj);
+        return make_constant_texture(nonneg_rgb(o, name, def));
+    }
+
+    std::shared_ptr<const Texture> build_texture(const SceneObject& t) {
+        auto it = textures_.find(&t);
+        if (it != textures_.end()) return it->second;
+        skip_if_broken(t);
+        UvTransform to_uv = UvTransform::from(t.get_transform("to_uv", Mat4()));
+        std::shared_ptr<const Texture> tex;
+        if (t.type == "checkerboard") {
+            auto c0 = texture_param(t, "color0", Rgb(0.4f)), c1 = texture_param(t, "color1", Rgb(0.2f));
+            tex = make_checkerboard_texture(std::const_pointer_cast<Texture>(c0), std::const_pointer_cast<Texture>(c1), to_uv);
+        } else if (t.type == "bitmap") {
+            std::string path = resolve_file(t, "filename");
+            std::string ft = t.get_string("filter_type", "bilinear"), wm = t.get_string("wrap_mode", "repeat");
+            BitmapFilter f;
+            if (ft == "bilinear") f = BitmapFilter::Bilinear;
+            else if (ft == "nearest") f = BitmapFilter::Nearest;
+            else throw perr(t, "filter_type", "must be bilinear or nearest, got " + quote(ft));
+            WrapMode w;
+            if (wm == "repeat") w = WrapMode::Repeat;
+            else if (wm == "mirror") w = WrapMode::Mirror;
+            else if (wm == "clamp") w = WrapMode::Clamp;
+            else throw perr(t, "wrap_mode", "must be repeat, mirror or clamp, got " + quote(wm));
+            bool raw = t.get_bool("raw", false);
+            std::string format = t.get_string("format", "variant");
+            if (format != "variant" && format != "fp32" && format != "fp16")
+                throw perr(t, "format", "must be variant, fp16 or fp32, got " + quote(format));
+            Image img;
+            try {
+                img = read_texture_image(path, raw);
+            } catch (const Error& e) {
+                throw Error(t.loc, t.describe() + ": " + e.what());
+            }
+            for (float v : img.rgb)
+                if (!(v >= 0) || !std::isfinite(v)) throw err(t, "image " + quote(path, 200) + " has negative or non-finite values");
+            tex = make_bitmap_texture(std::move(img.rgb), img.width, img.height, f, w, to_uv);
+        } else {
+            throw err(t, "unsupported texture plugin " + quote(t.type) + " (supported: bitmap, checkerboard)");
+        }
+        t.check_all_used();
+        textures_[&t] = tex;
+        return tex;
     }
 
     float roughness(const SceneObject& o, const std::string& name) {

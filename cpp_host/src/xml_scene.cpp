@@ -165,6 +165,15 @@ std::vector<const Child*> SceneObject::children_with_tag(const std::string& t) c
     return out;
 }
 
+const Child* SceneObject::child_named(const std::string& t, const std::string& name) const {
+    for (const Child& c : children)
+        if (c.obj->tag == t && c.name == name) {
+            c.used = true;
+            return &c;
+        }
+    return nullptr;
+}
+
 void SceneObject::check_all_used() const {
     ErrorSink sink;
     for (const Property& p : props)

@@ -92,6 +92,8 @@ struct SceneObject {
 
     /// Children with the given tag (marks them used). `name_filter` empty = any name.
     std::vector<const Child*> children_with_tag(const std::string& tag) const;
+    /// The child with this tag and name (a nested element's or a <ref>'s "name"), marked used.
+    const Child* child_named(const std::string& tag, const std::string& name) const;
     /// Throws mf::Error (an ErrorList if several) for every property or child not consumed.
     void check_all_used() const;
     /// Resolve a file name as Mitsuba's file resolver does: absolute, else the <path> folders

@@ -374,13 +374,18 @@ private:
         if (std::fabs(to_world.det3()) < 1e-30) throw perr(o, "to_world", "is singular");
         bool flip = o.get_bool("flip_normals", false);
         std::shared_ptr<Shape> shape;
-        if (t == "obj" || t == "ply") {
+        if (t == "obj" || t == "ply" || t == "serialized") {
             std::string path = resolve_file(o, "filename");
             bool face_normals = o.get_bool("face_normals", false);
+            long long shape_index = t == "serialized" ? o.get_int("shape_index", 0) : 0;
+            if (shape_index < 0 || shape_index > (1 << 30)) throw perr(o, "shape_index", "must be >= 0");
             bool flip_tc = t == "obj" && o.get_bool("flip_tex_coords", true);
             TriMesh m;
             try {
-                m = t == "obj" ? load_obj(path) : load_ply(path);
+                bool file_face_normals = false;
+                if (t == "serialized") m = load_serialized(path, int(shape_index), &file_face_normals);
+                else m = t == "obj" ? load_obj(path) : load_ply(path);
+                face_normals = face_normals || file_face_normals;
             } catch (const Error& e) {
                 throw Error(o.loc, o.describe() + ": " + e.what());
             }
@@ -434,7 +439,7 @@ private:
             }
             shape = ms;
         } else {
-            throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, sphere, rectangle, cube, disk)");
+            throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk)");
         }
         shape->id = o.id;
         shape->loc = o.loc;

@@ -694,23 +694,33 @@ std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions
 }
 
 const char* supported_subset_text() {
-    return R"(Supported Mitsuba 3 XML subset (<scene version="3.x.x">):
-  structure   <default name value>, $name substitution, -D name=value, <include filename>,
-              id="..." and <ref id="..."/> / <ref name="..." id="..."/>
+    return R"(Supported Mitsuba 3 XML subset (<scene version="x.y.z">, 0.x-3.x; pre-2.0 scenes are upgraded
+in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
+  structure   <default name value>, $name substitution, -D name=value, <include filename> (anywhere),
+              <path value> (resolver order: <path> folders latest first, the scene's folder, the
+              including file's folder, the working directory), id="..." and <ref id>/<ref name id>
+              (forward references too), <alias id as>
   properties  integer float boolean string rgb vector point transform
-              spectrum (a single constant value only -> grey RGB)
-  transforms  translate (x,y,z | value), rotate (axis x,y,z | value + angle in degrees),
-              scale (value | x,y,z), matrix (16 values, row-major), lookat (origin,target,up);
-              each operation is applied after the previous ones (Mitsuba's order)
-  shapes      obj, ply (ascii / binary_little_endian), sphere (center, radius), rectangle,
-              cube, disk; to_world, flip_normals, face_normals (obj/ply); nested bsdf,
-              area emitter, <medium name="interior|exterior">
-  bsdfs       diffuse (reflectance), conductor (material | eta,k; specular_reflectance),
+              spectrum (a single constant value -> grey RGB; wavelength lists are refused)
+              <rgb> outside emitters must lie in [0, 1] (Mitsuba's RGB variants refuse it) except
+              eta, k, int_ior, ext_ior: use <float> or rgb with a scale (e.g. sigma_t)
+  transforms  translate, rotate (axis as given, like Mitsuba: a non-unit axis also scales), scale,
+              matrix (16 or 9 values, row-major), lookat (origin, target, up; without up: the
+              first axis of Mitsuba's coordinate_system(direction)); applied in order
+  shapes      obj (flip_tex_coords), ply (ascii / binary_little_endian), serialized (shape_index;
+              zlib), sphere (center, radius), rectangle, cube, disk; to_world, flip_normals,
+              face_normals; nested or referenced bsdf, area emitter (nested, or a top-level
+              <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
+              uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)
+  textures    wherever listed below as (tex): a constant, <texture type="checkerboard"> (color0,
+              color1, to_uv) or <texture type="bitmap"> (filename .png/.jpg/.exr, filter_type
+              bilinear|nearest, wrap_mode repeat|mirror|clamp, raw, to_uv), nested with
+              name="param" or <ref name="param" id>
+  bsdfs       diffuse (reflectance (tex)), conductor (material | eta,k; specular_reflectance (tex)),
               roughconductor (distribution beckmann|ggx, alpha | alpha_u,alpha_v, material |
-              eta,k, sample_visible; mfrender extension: shadowing separable (default,
-              Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o))),
-              dielectric (int_ior, ext_ior: number or name),
-              null, twosided (one or two nested bsdfs)
+              eta,k, specular_reflectance (tex), sample_visible; mfrender extension: shadowing
+              separable (default, Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o))),
+              dielectric (int_ior, ext_ior: number or name), null, twosided (one or two bsdfs)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
               macrofacet (as the interior of its mean-surface shape; parameters as in the
@@ -724,11 +734,21 @@ const char* supported_subset_text() {
   emitters    area (radiance), point (position | to_world, intensity), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)
-  sensor      perspective (fov, fov_axis, to_world, near_clip, far_clip) with
-              hdrfilm (width, height, rfilter box | gaussian [rendered as box]) and
+  sensor      perspective (fov + fov_axis x|y|diagonal|smaller|larger, or focal_length such as
+              "50mm" on 35 mm film (Mitsuba's default when neither is given), focus_distance
+              (read, no effect on a pinhole), to_world, near_clip, far_clip) with hdrfilm (width,
+              height, rfilter gaussian (stddev; the default, 0.5) | tent (radius) | box) and
               independent sampler (sample_count, seed)
   integrators volpath, path (max_depth, rr_depth, hide_emitters)
-Unknown elements, plugin types or parameters are errors.
+Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
+Not supported (refused with the element's file:line): other plugins, e.g. plastic,
+roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
+normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media, gridvolume,
+spectra from files or wavelength lists.
+Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
+15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only
+(devices and pipes are refused); an attribute at most 1 MiB after $substitution; at most 100
+problems are listed; values echoed in messages are cut to 64 characters.
 )";
 }
 

@@ -813,6 +813,13 @@ private:
                 } else {
                     int d = 0;
                     for (const Child& c : f.o->children) d = std::max(d, depth_of[c.obj.get()] + 1);
+                    if (d >= XmlLimits::kMaxNesting) {
+                        errors_.add(Error(f.o->loc, f.o->describe() + ": objects nested (through references) more than " +
+                                                        std::to_string(XmlLimits::kMaxNesting) + " deep"));
+                        f.o->broken = true;
+                        f.o->children.clear();
+                        d = 0;
+                    }
                     depth_of[f.o] = d;
                     stack.pop_back();
                 }

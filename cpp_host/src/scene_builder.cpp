@@ -160,10 +160,19 @@ private:
                     throw perr(o, "shadowing", "must be \"separable\" or \"height_correlated\", got \"" + shadowing + "\"");
                 b = make_rough_conductor(ior, spec, mt, au, av, vis, shadowing == "height_correlated");
             }
-        } else if (t == "dielectric") {
+        } else if (t == "dielectric" || t == "thindielectric") {
             float ni = ior_value(o, "int_ior", "bk7"), ne = ior_value(o, "ext_ior", "air");
-            b = make_dielectric(ni, ne, nonneg_rgb(o, "specular_reflectance", Rgb(1.0f)),
-                                nonneg_rgb(o, "specular_transmittance", Rgb(1.0f)));
+            Rgb r = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f)), tr = nonneg_rgb(o, "specular_transmittance", Rgb(1.0f));
+            b = t == "dielectric" ? make_dielectric(ni, ne, r, tr) : make_thin_dielectric(ni, ne, r, tr);
+        } else if (t == "plastic") {
+            float ni = ior_value(o, "int_ior", "polypropylene"), ne = ior_value(o, "ext_ior", "air");
+            auto diffuse = texture_param(o, "diffuse_reflectance", Rgb(0.5f));
+            Rgb spec = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f));
+            bool nonlinear = o.get_bool("nonlinear", false);
+            // Mitsuba: the specular lobe's sampling weight from the mean reflectances
+            float d_mean = diffuse->constant() ? diffuse->constant()->average() : 0.5f * diffuse->max_value();
+            float s_mean = spec.average();
+            b = make_plastic(ni, ne, diffuse, spec, nonlinear, s_mean + d_mean > 0 ? s_mean / (s_mean + d_mean) : 0.5f);
         } else if (t == "null") {
             b = make_null_bsdf();
         } else if (t == "twosided") {
@@ -175,7 +184,7 @@ private:
             b = make_twosided(f, bk);
         } else {
             throw err(o, "unsupported BSDF plugin \"" + t +
-                             "\" (supported: diffuse, conductor, roughconductor, dielectric, null, twosided)");
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, plastic, null, twosided)");
         }
         o.check_all_used();
         bsdfs_[&o] = b;

@@ -1,9 +1,15 @@
 #!/usr/bin/env bash
 # Installs what building and testing macrofacet needs on Debian 12, only what is missing:
 # the Debian packages of the C/C++ side and the pinned cbindgen. Safe to run repeatedly.
+# Optional extras, only when asked:
+#   MF_SETUP_FUZZ=1     clang-14 + libclang-rt-14-dev (libFuzzer: scripts/fuzz_scene.sh)
+#   MF_SETUP_MITSUBA=1  Mitsuba 3.9.1 from PyPI (the reference of the Mitsuba comparison tests)
+#   MF_SETUP_SLURM=1    slurm-wlm + munge (scripts/slurm_local_test.sh)
 set -euo pipefail
 
-APT_PACKAGES=(cmake g++ make pkg-config libembree-dev libopenexr-dev libpng-dev libpugixml-dev)
+APT_PACKAGES=(cmake g++ make pkg-config libembree-dev libopenexr-dev libpng-dev libpugixml-dev libjpeg-dev zlib1g-dev)
+if [ "${MF_SETUP_FUZZ:-0}" = 1 ]; then APT_PACKAGES+=(clang-14 libclang-rt-14-dev); fi
+if [ "${MF_SETUP_SLURM:-0}" = 1 ]; then APT_PACKAGES+=(slurm-wlm munge); fi
 CBINDGEN_VERSION=0.29.4
 
 if ! command -v cargo >/dev/null 2>&1; then
@@ -28,4 +34,9 @@ fi
 if ! cbindgen --version 2>/dev/null | grep -qx "cbindgen $CBINDGEN_VERSION"; then
     echo "setup: installing cbindgen $CBINDGEN_VERSION" >&2
     cargo install --locked --quiet cbindgen --version "$CBINDGEN_VERSION"
+fi
+
+if [ "${MF_SETUP_MITSUBA:-0}" = 1 ] && ! python3 -c "import mitsuba, sys; sys.exit(mitsuba.__version__ != '3.9.1')" 2>/dev/null; then
+    echo "setup: installing mitsuba 3.9.1 (pip)" >&2
+    python3 -m pip install --quiet mitsuba==3.9.1
 fi

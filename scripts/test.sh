@@ -19,3 +19,12 @@ build_dir=build/test
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build_dir" -j "$(nproc)"
 ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)"
+
+# A bounded smoke of the scene-reader fuzzer where clang/libFuzzer are installed (the long run
+# is scripts/fuzz_scene.sh SECONDS); the Mitsuba comparisons run where Mitsuba 3 is installed.
+if command -v clang++-14 >/dev/null && dpkg-query -W -f='${Status}' libclang-rt-14-dev 2>/dev/null | grep -q "install ok installed"; then
+    echo "== fuzz smoke (scene reader, 20 s)" >&2
+    scripts/fuzz_scene.sh 20
+else
+    echo "== fuzz smoke skipped: clang-14 / libclang-rt-14-dev not installed (MF_SETUP_FUZZ=1 scripts/setup.sh installs them)" >&2
+fi

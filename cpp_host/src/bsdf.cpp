@@ -92,21 +92,21 @@ Rgb conductor_fresnel(const ConductorIor& ior, float cos_i) {
 
 class Diffuse final : public Bsdf {
 public:
-    explicit Diffuse(const Rgb& r) : r_(r) {}
-    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
+    explicit Diffuse(std::shared_ptr<const Texture> r) : r_(std::move(r)) {}
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
-        return r_ * (kInvPi * wi.z);
+        return r_->eval(uv) * (kInvPi * wi.z);
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         return wi.z * kInvPi;
     }
-    bool sample(const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         s->wi = cosine_hemisphere(u);
         if (s->wi.z <= 0) return false;
         s->pdf = s->wi.z * kInvPi;
-        s->weight = r_;
+        s->weight = r_->eval(uv);
         s->delta = false;
         s->transmission = false;
         s->eta = 1.0f;
@@ -115,19 +115,19 @@ public:
     std::string name() const override { return "diffuse"; }
 
 private:
-    Rgb r_;
+    std::shared_ptr<const Texture> r_;
 };
 
 class Conductor final : public Bsdf {
 public:
-    Conductor(const ConductorIor& ior, const Rgb& spec) : ior_(ior), spec_(spec) {}
-    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec3& wo, float, const Vec2&, BsdfSample* s) const override {
+    Conductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec) : ior_(ior), spec_(std::move(spec)) {}
+    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2&, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         s->wi = Vec3(-wo.x, -wo.y, wo.z);
         s->pdf = 1.0f;
-        s->weight = spec_ * conductor_fresnel(ior_, wo.z);
+        s->weight = spec_->eval(uv) * conductor_fresnel(ior_, wo.z);
         s->delta = true;
         s->transmission = false;
         s->eta = 1.0f;
@@ -138,29 +138,30 @@ public:
 
 private:
     ConductorIor ior_;
-    Rgb spec_;
+    std::shared_ptr<const Texture> spec_;
 };
 
 class RoughConductor final : public Bsdf {
 public:
-    RoughConductor(const ConductorIor& ior, const Rgb& spec, MicrofacetType t, float au, float av, bool vis, bool hc)
-        : ior_(ior), spec_(spec), mf_(t, au, av, vis, hc) {}
-    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
+    RoughConductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec, MicrofacetType t, float au, float av,
+                   bool vis, bool hc)
+        : ior_(ior), spec_(std::move(spec)), mf_(t, au, av, vis, hc) {}
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         Vec3 h = normalize(wo + wi);
         float D = mf_.D(h);
         if (D == 0) return Rgb(0.0f);
         float G = mf_.G(wo, wi, h);
-        return spec_ * conductor_fresnel(ior_, dot(wo, h)) * (D * G / (4.0f * wo.z));
+        return spec_->eval(uv) * conductor_fresnel(ior_, dot(wo, h)) * (D * G / (4.0f * wo.z));
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         Vec3 h = normalize(wo + wi);
         float d = dot(wo, h);
         if (d <= 0) return 0.0f;
         return mf_.pdf(wo, h) / (4.0f * d);
     }
-    bool sample(const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         float mpdf;
         Vec3 m = mf_.sample(wo, u, &mpdf);
@@ -172,7 +173,7 @@ public:
         s->wi = wi;
         s->pdf = mpdf / (4.0f * d);
         if (!(s->pdf > 0) || !std::isfinite(s->pdf)) return false;
-        s->weight = eval(wo, wi) / s->pdf;
+        s->weight = eval(uv, wo, wi) / s->pdf;
         s->delta = false;
         s->transmission = false;
         s->eta = 1.0f;
@@ -182,16 +183,16 @@ public:
 
 private:
     ConductorIor ior_;
-    Rgb spec_;
+    std::shared_ptr<const Texture> spec_;
     Microfacet mf_;
 };
 
 class Dielectric final : public Bsdf {
 public:
     Dielectric(float eta, const Rgb& r, const Rgb& t) : eta_(eta), r_(r), t_(t) {}
-    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
+    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec2&, const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
         if (wo.z == 0) return false;
         float cos_t;
         float F = fresnel_dielectric(wo.z, eta_, &cos_t);
@@ -221,11 +222,123 @@ private:
     Rgb r_, t_;
 };
 
+/// Mitsuba's thindielectric: a thin slab with two parallel interfaces; light either reflects
+/// (mirror) or passes straight through. With the Fresnel reflectance R of one interface, the
+/// slab's total reflectance sums the inter-reflections: R' = R + T^2 R / (1 - R^2), T = 1 - R.
+class ThinDielectric final : public Bsdf {
+public:
+    ThinDielectric(float eta, const Rgb& r, const Rgb& t) : eta_(eta), r_(r), t_(t) {}
+    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec2&, const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
+        if (wo.z == 0) return false;
+        float R = fresnel_dielectric(std::fabs(wo.z), eta_, nullptr), T = 1.0f - R;
+        if (R < 1.0f) R += T * T * R / (1.0f - R * R);
+        s->delta = true;
+        s->eta = 1.0f;
+        if (u_lobe < R) {
+            s->wi = Vec3(-wo.x, -wo.y, wo.z);
+            s->pdf = R;
+            s->weight = r_;
+            s->transmission = false;
+        } else {
+            s->wi = -wo;
+            s->pdf = 1.0f - R;
+            s->weight = t_;
+            s->transmission = true;
+        }
+        return true;
+    }
+    bool is_delta() const override { return true; }
+    std::string name() const override { return "thindielectric"; }
+
+private:
+    float eta_;
+    Rgb r_, t_;
+};
+
+/// Hemispherical average of the dielectric Fresnel reflectance for light arriving from the side
+/// of relative index `eta` (2 ∫ F(cos) cos d cos; Simpson quadrature, exact to ~1e-6 — Mitsuba
+/// uses polynomial fits of the same integral, accurate to ~0.1 %).
+float fresnel_diffuse_reflectance(float eta) {
+    const int n = 512;  // even
+    double sum = 0;
+    for (int i = 0; i <= n; ++i) {
+        double c = double(i) / n;
+        double w = (i == 0 || i == n) ? 1 : (i % 2 ? 4 : 2);
+        sum += w * double(fresnel_dielectric(float(c), eta, nullptr)) * c;
+    }
+    return float(2.0 * sum / (3.0 * n));
+}
+
+/// Mitsuba's plastic: a smooth dielectric coating (delta specular reflection, Fresnel F) over a
+/// diffuse base whose light is refracted in and out, with the base's internal reflections
+/// summed: f_d = R_d / (1 - Fdr_int) (or R_d / (1 - R_d Fdr_int) with `nonlinear`) x
+/// (1 - F(cos_o)) (1 - F(cos_i)) / (eta^2 pi). The specular lobe is picked with probability
+/// F(cos_o) w_s / (F(cos_o) w_s + (1 - F(cos_o)) (1 - w_s)), w_s = mean specular / (mean
+/// specular + mean diffuse reflectance), as Mitsuba does.
+class Plastic final : public Bsdf {
+public:
+    Plastic(float eta, std::shared_ptr<const Texture> diffuse, const Rgb& specular, bool nonlinear, float spec_weight)
+        : eta_(eta), diffuse_(std::move(diffuse)), specular_(specular), nonlinear_(nonlinear), spec_weight_(spec_weight),
+          fdr_int_(fresnel_diffuse_reflectance(1.0f / eta)) {}
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
+        return diffuse_term(uv, wo.z, wi.z) * wi.z;
+    }
+    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return 0.0f;
+        return prob_diffuse(wo.z) * wi.z * kInvPi;
+    }
+    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z <= 0) return false;
+        float F_o = fresnel_dielectric(wo.z, eta_, nullptr);
+        float p_d = prob_diffuse(wo.z), p_s = 1.0f - p_d;
+        s->transmission = false;
+        s->eta = 1.0f;
+        if (u_lobe < p_s) {
+            s->wi = Vec3(-wo.x, -wo.y, wo.z);
+            s->pdf = p_s;
+            s->weight = specular_ * (F_o / p_s);
+            s->delta = true;
+            return true;
+        }
+        float r = std::sqrt(u.x), phi = 2.0f * kPi * u.y;
+        s->wi = Vec3(r * std::cos(phi), r * std::sin(phi), safe_sqrt(1.0f - u.x));
+        if (s->wi.z <= 0) return false;
+        s->pdf = p_d * s->wi.z * kInvPi;
+        s->weight = diffuse_term(uv, wo.z, s->wi.z) * (kPi / p_d);  // f cos / (p_d cos / pi)
+        s->delta = false;
+        return true;
+    }
+    std::string name() const override { return "plastic"; }
+
+private:
+    /// f_d without the cosine.
+    Rgb diffuse_term(const Vec2& uv, float cos_o, float cos_i) const {
+        Rgb d = diffuse_->eval(uv);
+        for (int c = 0; c < 3; ++c) d[c] /= 1.0f - (nonlinear_ ? d[c] * fdr_int_ : fdr_int_);
+        float F_o = fresnel_dielectric(cos_o, eta_, nullptr), F_i = fresnel_dielectric(cos_i, eta_, nullptr);
+        return d * ((1.0f - F_o) * (1.0f - F_i) * kInvPi / (eta_ * eta_));
+    }
+    float prob_diffuse(float cos_o) const {
+        float F_o = fresnel_dielectric(cos_o, eta_, nullptr);
+        float ps = F_o * spec_weight_, pd = (1.0f - F_o) * (1.0f - spec_weight_);
+        return ps + pd > 0 ? pd / (ps + pd) : 1.0f;
+    }
+    float eta_;
+    std::shared_ptr<const Texture> diffuse_;
+    Rgb specular_;
+    bool nonlinear_;
+    float spec_weight_;
+    float fdr_int_;
+};
+
 class NullBsdf final : public Bsdf {
 public:
-    Rgb eval(const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec3&, float, const Vec2&, BsdfSample*) const override { return false; }
+    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const Vec2&, const Vec3&, float, const Vec2&, BsdfSample*) const override { return false; }
     bool is_delta() const override { return true; }
     bool is_null() const override { return true; }
     std::string name() const override { return "null"; }
@@ -235,15 +348,15 @@ class TwoSided final : public Bsdf {
 public:
     TwoSided(std::shared_ptr<Bsdf> f, std::shared_ptr<Bsdf> b) : f_(std::move(f)), b_(std::move(b)) {}
     static Vec3 flip(const Vec3& v) { return Vec3(v.x, v.y, -v.z); }
-    Rgb eval(const Vec3& wo, const Vec3& wi) const override {
-        return wo.z >= 0 ? f_->eval(wo, wi) : b_->eval(flip(wo), flip(wi));
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        return wo.z >= 0 ? f_->eval(uv, wo, wi) : b_->eval(uv, flip(wo), flip(wi));
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
-        return wo.z >= 0 ? f_->pdf(wo, wi) : b_->pdf(flip(wo), flip(wi));
+    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        return wo.z >= 0 ? f_->pdf(uv, wo, wi) : b_->pdf(uv, flip(wo), flip(wi));
     }
-    bool sample(const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
-        if (wo.z >= 0) return f_->sample(wo, ul, u, s);
-        if (!b_->sample(flip(wo), ul, u, s)) return false;
+    bool sample(const Vec2& uv, const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z >= 0) return f_->sample(uv, wo, ul, u, s);
+        if (!b_->sample(uv, flip(wo), ul, u, s)) return false;
         s->wi = flip(s->wi);
         return true;
     }
@@ -256,14 +369,24 @@ private:
 
 }  // namespace
 
-std::shared_ptr<Bsdf> make_diffuse(const Rgb& r) { return std::make_shared<Diffuse>(r); }
-std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, const Rgb& s) { return std::make_shared<Conductor>(ior, s); }
-std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, const Rgb& s, MicrofacetType t, float au, float av,
-                                           bool vis, bool hc) {
+std::shared_ptr<Bsdf> make_diffuse(const Rgb& r) { return std::make_shared<Diffuse>(make_constant_texture(r)); }
+std::shared_ptr<Bsdf> make_diffuse(std::shared_ptr<const Texture> r) { return std::make_shared<Diffuse>(std::move(r)); }
+std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> s) {
+    return std::make_shared<Conductor>(ior, std::move(s));
+}
+std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> s, MicrofacetType t,
+                                           float au, float av, bool vis, bool hc) {
     return std::make_shared<RoughConductor>(ior, s, t, au, av, vis, hc);
 }
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {
     return std::make_shared<Dielectric>(int_ior / ext_ior, r, t);
+}
+std::shared_ptr<Bsdf> make_thin_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {
+    return std::make_shared<ThinDielectric>(int_ior / ext_ior, r, t);
+}
+std::shared_ptr<Bsdf> make_plastic(float int_ior, float ext_ior, std::shared_ptr<const Texture> diffuse,
+                                   const Rgb& specular, bool nonlinear, float specular_sampling_weight) {
+    return std::make_shared<Plastic>(int_ior / ext_ior, std::move(diffuse), specular, nonlinear, specular_sampling_weight);
 }
 std::shared_ptr<Bsdf> make_null_bsdf() { return std::make_shared<NullBsdf>(); }
 std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> f, std::shared_ptr<Bsdf> b) {

@@ -10,6 +10,7 @@
 
 #include "math.h"
 #include "microfacet.h"
+#include "texture.h"
 
 namespace mf {
 
@@ -25,10 +26,14 @@ struct BsdfSample {
 class Bsdf {
 public:
     virtual ~Bsdf() = default;
-    /// f(wo, wi) |cos wi| for the non-Dirac part.
-    virtual Rgb eval(const Vec3& wo, const Vec3& wi) const = 0;
-    virtual float pdf(const Vec3& wo, const Vec3& wi) const = 0;
-    virtual bool sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const = 0;
+    /// f(wo, wi) |cos wi| for the non-Dirac part, at texture coordinates uv (SurfaceHit::uv).
+    virtual Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const = 0;
+    virtual float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const = 0;
+    virtual bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const = 0;
+    /// The same at uv = (0, 0) (untextured BSDFs, tests).
+    Rgb eval(const Vec3& wo, const Vec3& wi) const { return eval(Vec2(), wo, wi); }
+    float pdf(const Vec3& wo, const Vec3& wi) const { return pdf(Vec2(), wo, wi); }
+    bool sample(const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const { return sample(Vec2(), wo, u_lobe, u, s); }
     /// True when every lobe is a Dirac delta (next-event estimation is skipped).
     virtual bool is_delta() const { return false; }
     /// The `null` BSDF: the surface only delimits media and is skipped by rays.
@@ -50,11 +55,18 @@ std::string conductor_preset_list();
 bool dielectric_ior_by_name(const std::string& name, float* ior);
 
 std::shared_ptr<Bsdf> make_diffuse(const Rgb& reflectance);
-std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, const Rgb& specular_reflectance);
-std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, const Rgb& specular_reflectance,
+std::shared_ptr<Bsdf> make_diffuse(std::shared_ptr<const Texture> reflectance);
+std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> specular_reflectance);
+std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> specular_reflectance,
                                            MicrofacetType type, float alpha_u, float alpha_v, bool sample_visible,
                                            bool height_correlated = false);
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);
+/// Mitsuba's thindielectric (a thin slab: mirror reflection or straight transmission).
+std::shared_ptr<Bsdf> make_thin_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);
+/// Mitsuba's plastic (smooth coating over a diffuse base; see bsdf.cpp).
+std::shared_ptr<Bsdf> make_plastic(float int_ior, float ext_ior, std::shared_ptr<const Texture> diffuse,
+                                   const Rgb& specular, bool nonlinear, float specular_sampling_weight);
+float fresnel_diffuse_reflectance(float eta);
 std::shared_ptr<Bsdf> make_null_bsdf();
 std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> front, std::shared_ptr<Bsdf> back);
 

@@ -9,12 +9,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <new>
 #include <string>
 
 #include "image_io.h"
 #include "render.h"
 #include "scene_builder.h"
+#include "shard.h"
 #include "xml_scene.h"
 
 namespace mf {
@@ -23,7 +25,8 @@ namespace {
 
 const char* kUsage =
     "usage: mfrender scene.xml [-o out.exr] [--spp N] [--seed S] [--threads N] [--max-depth N]\n"
-    "                [-D name=value]... [--quiet] [--check] [--help]\n"
+    "                [-D name=value]... [--shard I/N] [--quiet] [--check] [--help]\n"
+    "       mfrender merge -o out.exr part.mfpart...\n"
     "\n"
     "Renders a Mitsuba 3 XML scene (subset below) with a volumetric path tracer and writes a\n"
     "float RGB OpenEXR image plus an 8-bit sRGB PNG preview beside it (out.png).\n"
@@ -36,7 +39,13 @@ const char* kUsage =
     "  --max-depth N  override the integrator's max_depth (-1 = unbounded)\n"
     "  -D name=value  define/override a <default> parameter used as $name in the scene\n"
     "  --quiet        no progress bar and no summary line\n"
-    "  --check        parse and build the scene, print a summary, do not render\n"
+    "  --check        parse and build the scene, print a summary, do not render; every problem\n"
+    "                 of the file is listed (rendering lists them too)\n"
+    "  --shard I/N    render only shard I of N (0 <= I < N): sample indices [spp*I/N, spp*(I+1)/N)\n"
+    "                 of every pixel; writes the unnormalised film (default -o: scene.part-I-of-N.mfpart)\n"
+    "  merge          add the parts 0..N-1 of one render (same scene text, -D values, seed, spp,\n"
+    "                 size, filter, depth; anything else is refused) into the image the single run\n"
+    "                 makes (to rounding): mfrender merge -o out.exr parts... (also writes out.png)\n"
     "  --help         this text\n"
     "\n"
     "Exit status: 0 on success, 1 on a scene or rendering error (one message naming the file\n"
@@ -79,10 +88,97 @@ struct TempFiles {
     }
 };
 
+void check_output_dir(const std::string& out_path) {
+    struct stat st;
+    std::string d = dir_of(out_path);
+    if (::stat(d.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw Error("output directory \"" + d + "\" does not exist");
+}
+
+void rename_or_throw(const std::string& from, const std::string& to) {
+    if (std::rename(from.c_str(), to.c_str()) != 0)
+        throw Error("cannot rename \"" + from + "\" to \"" + to + "\": " + std::strerror(errno));
+}
+
+/// Write out.exr and its PNG preview under temporary names, renamed only when both succeeded.
+std::string write_image_outputs(const std::string& out_path, const Image& img) {
+    std::string png_path = replace_ext(out_path, ".png");
+    if (png_path == out_path) png_path = out_path + ".png";
+    TempFiles tmp;
+    std::string pid = std::to_string(::getpid());
+    std::string exr_tmp = out_path + ".partial-" + pid, png_tmp = png_path + ".partial-" + pid;
+    tmp.paths = {exr_tmp, png_tmp};
+    write_exr(exr_tmp, img);
+    write_png_srgb(png_tmp, img);
+    rename_or_throw(exr_tmp, out_path);
+    try {
+        rename_or_throw(png_tmp, png_path);
+    } catch (...) {
+        std::remove(out_path.c_str());
+        throw;
+    }
+    return png_path;
+}
+
+int report_failure(const std::function<void()>& body) {
+    try {
+        body();
+        return 0;
+    } catch (const ErrorList& list) {
+        for (const Error& e : list.errors()) std::fprintf(stderr, "mfrender: error: %s\n", e.what());
+        std::fprintf(stderr, "mfrender: %zu problems\n", list.errors().size());
+    } catch (const Error& e) {
+        std::fprintf(stderr, "mfrender: error: %s\n", e.what());
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "mfrender: error: out of memory\n");
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "mfrender: error: %s\n", e.what());
+    } catch (...) {
+        std::fprintf(stderr, "mfrender: error: unknown failure\n");
+    }
+    return 1;
+}
+
+int merge_main(int argc, char** argv) {
+    std::string out_path;
+    std::vector<std::string> parts;
+    for (int i = 2; i < argc; ++i) {
+        std::string a = argv[i];
+        if (a == "-o" || a == "--output") {
+            if (i + 1 >= argc || !*argv[i + 1]) {
+                std::fprintf(stderr, "mfrender: error: -o needs a file name\nrun 'mfrender --help' for usage\n");
+                return 2;
+            }
+            out_path = argv[++i];
+        } else if (!a.empty() && a[0] == '-') {
+            std::fprintf(stderr, "mfrender: error: merge: unknown option \"%s\"\nrun 'mfrender --help' for usage\n", a.c_str());
+            return 2;
+        } else {
+            parts.push_back(a);
+        }
+    }
+    if (out_path.empty() || parts.empty()) {
+        std::fprintf(stderr, "mfrender: error: merge needs -o out.exr and at least one part\nrun 'mfrender --help' for usage\n");
+        return 2;
+    }
+    return report_failure([&] {
+        check_output_dir(out_path);
+        ShardHeader h;
+        FilmSums film = merge_shards(parts, &h);
+        std::string png = write_image_outputs(out_path, develop(film));
+        if (h.invalid_samples > 0)
+            std::fprintf(stderr, "mfrender: warning: %llu samples had non-finite radiance and were counted as 0\n",
+                         (unsigned long long)h.invalid_samples);
+        std::fprintf(stderr, "mfrender: merged %d shards (%dx%d, %d spp) -> %s, %s\n", h.shard_count, h.width, h.height,
+                     h.spp, out_path.c_str(), png.c_str());
+    });
+}
+
 }  // namespace
 
 int mfrender_main(int argc, char** argv) {
+    if (argc >= 2 && std::string(argv[1]) == "merge") return merge_main(argc, argv);
     std::string scene_path, out_path;
+    int shard_index = -1, shard_count = 0;
     Defines defines;
     BuildOptions bopts;
     RenderOptions ropts;
@@ -111,6 +207,12 @@ int mfrender_main(int argc, char** argv) {
                 quiet = true;
             } else if (a == "--check") {
                 check = true;
+            } else if (a == "--shard") {
+                const char* v = next();
+                int consumed = 0;
+                if (!v || std::sscanf(v, "%d/%d%n", &shard_index, &shard_count, &consumed) != 2 || v[consumed] ||
+                    shard_count < 1 || shard_count > (1 << 24) || shard_index < 0 || shard_index >= shard_count)
+                    throw UsageError{"--shard expects I/N with 0 <= I < N, got \"" + std::string(v ? v : "") + "\""};
             } else if (a.rfind("-D", 0) == 0) {
                 std::string def = a.size() > 2 ? a.substr(2) : std::string(next() ? argv[i] : "");
                 size_t eq = def.find('=');
@@ -137,20 +239,21 @@ int mfrender_main(int argc, char** argv) {
         return 2;
     }
 
-    try {
-        if (out_path.empty()) out_path = replace_ext(scene_path, ".exr");
-        std::string png_path = replace_ext(out_path, ".png");
-        if (png_path == out_path) png_path = out_path + ".png";
-        {
-            struct stat st;
-            std::string d = dir_of(out_path);
-            if (::stat(d.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
-                throw Error("output directory \"" + d + "\" does not exist");
-        }
-        ParsedScene parsed = parse_scene_file(scene_path, defines);
+    return report_failure([&] {
+        const bool sharded = shard_count > 0;
+        if (out_path.empty())
+            out_path = sharded ? replace_ext(scene_path, ".part-" + std::to_string(shard_index) + "-of-" +
+                                                             std::to_string(shard_count) + ".mfpart")
+                               : replace_ext(scene_path, ".exr");
+        check_output_dir(out_path);
+        // Every problem of the file is reported in one run: the reader's and the builder's.
+        ErrorSink problems;
+        ParsedScene parsed = parse_scene_file(scene_path, defines, &problems);
         bopts.allow_macrofacet_placeholders = false;  // --check validates macrofacet parameters too
         BuildReport report;
-        std::unique_ptr<Scene> scene = build_scene(parsed, bopts, &report);
+        std::unique_ptr<Scene> scene;
+        if (parsed.root) scene = build_scene(parsed, bopts, &report, &problems);
+        problems.raise();
         if (check) {
             SceneSummary s = scene->summary();
             std::printf("%s: OK: %zu shapes (%zu triangles), %zu emitters, %zu media, %dx%d, %d spp, %s\n",
@@ -164,43 +267,37 @@ int mfrender_main(int argc, char** argv) {
                 for (const auto& kv : u.bag->params) std::printf(" %s", kv.first.c_str());
                 std::printf("\n");
             }
-            return 0;
+            return;
         }
         ropts.progress = !quiet && ::isatty(STDERR_FILENO);
+        if (sharded) {
+            ropts.shard_index = shard_index;
+            ropts.shard_count = shard_count;
+        }
         RenderStats stats;
-        Image img = render(*scene, ropts, &stats);
-
-        TempFiles tmp;
-        std::string pid = std::to_string(::getpid());
-        std::string exr_tmp = out_path + ".partial-" + pid, png_tmp = png_path + ".partial-" + pid;
-        tmp.paths = {exr_tmp, png_tmp};
-        write_exr(exr_tmp, img);
-        write_png_srgb(png_tmp, img);
-        if (std::rename(exr_tmp.c_str(), out_path.c_str()) != 0)
-            throw Error("cannot rename \"" + exr_tmp + "\" to \"" + out_path + "\": " + std::strerror(errno));
-        if (std::rename(png_tmp.c_str(), png_path.c_str()) != 0) {
-            std::string why = std::strerror(errno);
-            std::remove(out_path.c_str());
-            throw Error("cannot rename \"" + png_tmp + "\" to \"" + png_path + "\": " + why);
+        FilmSums film = render_film(*scene, ropts, &stats);
+        std::string written;
+        if (sharded) {
+            ShardHeader h = shard_header(*scene, scene_path, shard_index, shard_count);
+            h.invalid_samples = stats.invalid_samples;
+            TempFiles tmp;
+            std::string part_tmp = out_path + ".partial-" + std::to_string(::getpid());
+            tmp.paths = {part_tmp};
+            write_shard(part_tmp, h, film);
+            rename_or_throw(part_tmp, out_path);
+            written = out_path;
+        } else {
+            written = out_path + ", " + write_image_outputs(out_path, develop(film));
         }
         if (stats.invalid_samples > 0)
             std::fprintf(stderr, "mfrender: warning: %llu samples had non-finite radiance and were counted as 0\n",
                          (unsigned long long)stats.invalid_samples);
         if (!quiet)
-            std::fprintf(stderr, "mfrender: %dx%d, %d spp in %.2f s (%.2f Msamples/s) -> %s, %s\n", img.width, img.height,
-                         scene->spp, stats.seconds, stats.seconds > 0 ? double(stats.samples) / stats.seconds * 1e-6 : 0.0,
-                         out_path.c_str(), png_path.c_str());
-        return 0;
-    } catch (const Error& e) {
-        std::fprintf(stderr, "mfrender: error: %s\n", e.what());
-    } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "mfrender: error: out of memory\n");
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "mfrender: error: %s\n", e.what());
-    } catch (...) {
-        std::fprintf(stderr, "mfrender: error: unknown failure\n");
-    }
-    return 1;
+            std::fprintf(stderr, "mfrender: %dx%d, %d spp%s in %.2f s (%.2f Msamples/s) -> %s\n", scene->camera.width,
+                         scene->camera.height, scene->spp,
+                         sharded ? (" (shard " + std::to_string(shard_index) + "/" + std::to_string(shard_count) + ")").c_str() : "",
+                         stats.seconds, stats.seconds > 0 ? double(stats.samples) / stats.seconds * 1e-6 : 0.0, written.c_str());
+    });
 }
 
 }  // namespace mf

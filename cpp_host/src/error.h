@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace mf {
 
@@ -26,5 +27,55 @@ public:
 private:
     SourceLoc loc_;
 };
+
+/// Several independent problems found in one run (the scene reader and builder report every
+/// refusal of a file at once). what() is the messages, one per line.
+class ErrorList : public Error {
+public:
+    explicit ErrorList(std::vector<Error> errors) : Error(join(errors)), errors_(std::move(errors)) {}
+    const std::vector<Error>& errors() const { return errors_; }
+
+private:
+    static std::string join(const std::vector<Error>& errors) {
+        std::string s;
+        for (const Error& e : errors) s += (s.empty() ? "" : "\n") + std::string(e.what());
+        return s;
+    }
+    std::vector<Error> errors_;
+};
+
+/// Collects errors up to a bound; `raise()` throws them as one ErrorList (nothing if none).
+class ErrorSink {
+public:
+    static constexpr size_t kMaxErrors = 100;  // a broken file must not flood the terminal
+    void add(const Error& e) {
+        if (auto* list = dynamic_cast<const ErrorList*>(&e)) {
+            for (const Error& x : list->errors()) add(x);
+            return;
+        }
+        if (errors_.size() < kMaxErrors) errors_.push_back(e);
+        else ++dropped_;
+    }
+    bool empty() const { return errors_.empty(); }
+    size_t size() const { return errors_.size() + dropped_; }
+    void raise() const {
+        if (errors_.empty()) return;
+        std::vector<Error> all = errors_;
+        if (dropped_) all.push_back(Error("... and " + std::to_string(dropped_) + " more problems"));
+        if (all.size() == 1) throw all[0];
+        throw ErrorList(std::move(all));
+    }
+
+private:
+    std::vector<Error> errors_;
+    size_t dropped_ = 0;
+};
+
+/// A user-supplied string for a message: quoted, and cut to `max_chars` (with its full length)
+/// so that a huge attribute is never echoed whole.
+inline std::string quote(const std::string& s, size_t max_chars = 64) {
+    if (s.size() <= max_chars) return "\"" + s + "\"";
+    return "\"" + s.substr(0, max_chars) + "...\" (" + std::to_string(s.size()) + " bytes)";
+}
 
 }  // namespace mf

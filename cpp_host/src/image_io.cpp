@@ -7,10 +7,13 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <png.h>
+#include <jpeglib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <csetjmp>
+#include <cstring>
+#include <cctype>
 #include <cstdio>
 #include <exception>
 
@@ -76,6 +79,103 @@ void write_exr(const std::string& path, const Image& img) {
     } catch (const std::exception& e) {
         throw Error("cannot write OpenEXR file \"" + path + "\": " + e.what());
     }
+}
+
+float srgb_eotf(float v) {
+    return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+namespace {
+
+bool has_ext(const std::string& path, const char* ext) {
+    size_t n = std::strlen(ext);
+    if (path.size() < n) return false;
+    for (size_t i = 0; i < n; ++i)
+        if (std::tolower((unsigned char)path[path.size() - n + i]) != ext[i]) return false;
+    return true;
+}
+
+Image read_png_rgb(const std::string& path) {
+    png_image im;
+    std::memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&im, path.c_str()))
+        throw Error("cannot read PNG file \"" + path + "\": " + im.message);
+    im.format = PNG_FORMAT_RGB;
+    if (im.width == 0 || im.height == 0 || im.width > 65536 || im.height > 65536) {
+        png_image_free(&im);
+        throw Error("PNG file \"" + path + "\" has an unsupported size");
+    }
+    std::vector<unsigned char> buf(PNG_IMAGE_SIZE(im));
+    if (!png_image_finish_read(&im, nullptr, buf.data(), 0, nullptr)) {
+        std::string msg = im.message;
+        png_image_free(&im);
+        throw Error("cannot read PNG file \"" + path + "\": " + msg);
+    }
+    Image img;
+    img.width = int(im.width);
+    img.height = int(im.height);
+    img.rgb.resize(buf.size());
+    for (size_t i = 0; i < buf.size(); ++i) img.rgb[i] = float(buf[i]) / 255.0f;
+    return img;
+}
+
+struct JpegError {
+    jpeg_error_mgr mgr;
+    jmp_buf jump;
+};
+
+void jpeg_fail(j_common_ptr cinfo) {
+    longjmp(reinterpret_cast<JpegError*>(cinfo->err)->jump, 1);
+}
+
+Image read_jpeg_rgb(const std::string& path) {
+    FILE* fp = std::fopen(path.c_str(), "rb");
+    if (!fp) throw Error("cannot open JPEG file \"" + path + "\"");
+    jpeg_decompress_struct cinfo;
+    JpegError err;
+    cinfo.err = jpeg_std_error(&err.mgr);
+    err.mgr.error_exit = jpeg_fail;
+    Image img;
+    std::vector<unsigned char> row;
+    if (setjmp(err.jump)) {
+        jpeg_destroy_decompress(&cinfo);
+        std::fclose(fp);
+        throw Error("cannot read JPEG file \"" + path + "\"");
+    }
+    jpeg_create_decompress(&cinfo);
+    jpeg_stdio_src(&cinfo, fp);
+    jpeg_read_header(&cinfo, TRUE);
+    cinfo.out_color_space = JCS_RGB;
+    jpeg_start_decompress(&cinfo);
+    if (cinfo.output_width > 65536 || cinfo.output_height > 65536 || cinfo.output_components != 3) longjmp(err.jump, 1);
+    img.width = int(cinfo.output_width);
+    img.height = int(cinfo.output_height);
+    img.rgb.resize(size_t(img.width) * img.height * 3);
+    row.resize(size_t(img.width) * 3);
+    while (cinfo.output_scanline < cinfo.output_height) {
+        unsigned char* r = row.data();
+        size_t y = cinfo.output_scanline;
+        jpeg_read_scanlines(&cinfo, &r, 1);
+        for (size_t i = 0; i < row.size(); ++i) img.rgb[y * row.size() + i] = float(row[i]) / 255.0f;
+    }
+    jpeg_finish_decompress(&cinfo);
+    jpeg_destroy_decompress(&cinfo);
+    std::fclose(fp);
+    return img;
+}
+
+}  // namespace
+
+Image read_texture_image(const std::string& path, bool raw) {
+    if (has_ext(path, ".exr")) return read_exr(path);
+    Image img;
+    if (has_ext(path, ".png")) img = read_png_rgb(path);
+    else if (has_ext(path, ".jpg") || has_ext(path, ".jpeg")) img = read_jpeg_rgb(path);
+    else throw Error("unsupported image format of \"" + path + "\" (supported: .exr, .png, .jpg)");
+    if (!raw)
+        for (float& v : img.rgb) v = srgb_eotf(v);
+    return img;
 }
 
 float srgb_oetf(float v) {

@@ -186,7 +186,10 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
 
         if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
 
-        Frame frame(hit.ns);
+        // Mitsuba 3's shading frame: tangent = dp/du orthogonalised against the shading normal.
+        // Like Mitsuba, directions are judged in this frame only: a direction below the
+        // geometric normal but above the shading normal is kept (the BSDF decides).
+        Frame frame = Frame::shading(hit.ns, hit.dpdu);
         Vec3 wo_l = frame.to_local(-ray.d);
         if (!bsdf.is_delta() && !emitters.empty()) {
             // shadow rays leave on the side of wi; pick the origin and medium accordingly
@@ -195,11 +198,9 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             EmitterSample es;
             if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0) {
                 Vec3 wi_l = frame.to_local(es.wi);
-                Rgb f = bsdf.eval(wo_l, wi_l);
-                // reject directions on inconsistent sides of the geometric vs shading normal
-                bool consistent = (dot(es.wi, hit.ng) * wi_l.z > 0) && (dot(-ray.d, hit.ng) * wo_l.z > 0);
-                if (!f.is_black() && consistent) {
-                    float f_pdf = bsdf.pdf(wo_l, wi_l);
+                Rgb f = bsdf.eval(hit.uv, wo_l, wi_l);
+                if (!f.is_black()) {
+                    float f_pdf = bsdf.pdf(hit.uv, wo_l, wi_l);
                     const Medium* m = medium;
                     if (vol && shape->is_medium_transition()) m = shape->target_medium(hit.ng, es.wi);
                     Vec3 o = offset_ray_origin(hit.p, hit.ng, es.wi);
@@ -215,11 +216,8 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         }
 
         BsdfSample bs;
-        if (!bsdf.sample(wo_l, sampler.next_1d(), sampler.next_2d(), &bs)) break;
+        if (!bsdf.sample(hit.uv, wo_l, sampler.next_1d(), sampler.next_2d(), &bs)) break;
         Vec3 wi = frame.to_world(bs.wi);
-        // a sampled direction must leave on the side its lobe intends (geometric normal check)
-        float side = dot(wi, hit.ng) * bs.wi.z;
-        if (!(side > 0)) break;
         beta *= bs.weight;
         if (beta.is_black() || !beta.finite()) break;
         eta_scale *= bs.eta * bs.eta;

@@ -90,6 +90,17 @@ struct Frame {
         s = Vec3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
         t = Vec3(b, sign + n.y * n.y * a, -n.y);
     }
+    Frame(const Vec3& s_, const Vec3& t_, const Vec3& n_) : s(s_), t(t_), n(n_) {}
+    /// Mitsuba 3's shading frame (SurfaceInteraction::initialize_sh_frame): s = dp/du made
+    /// orthogonal to the unit normal n by Gram-Schmidt, t = n x s; where dp/du vanishes or is
+    /// parallel to n, the basis of Frame(n). Anisotropic roughness alpha_u runs along s.
+    static Frame shading(const Vec3& n, const Vec3& dpdu) {
+        Vec3 s = dpdu - n * dot(n, dpdu);
+        float l2 = length_sq(s);
+        if (!(l2 > 1e-20f * length_sq(dpdu)) || !std::isfinite(l2)) return Frame(n);
+        s = s / std::sqrt(l2);
+        return Frame(s, cross(n, s), n);
+    }
     Vec3 to_local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
     Vec3 to_world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
 };

@@ -1,6 +1,9 @@
 // mfhost — OBJ / PLY readers and mesh utilities.
 #include "mesh_io.h"
 
+#include <zlib.h>
+#include <iterator>
+
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -428,6 +431,141 @@ TriMesh load_ply(const std::string& path) {
         }
     }
     if (m.idx.empty()) throw Error(SourceLoc{path, 0}, "PLY file contains no faces");
+    return m;
+}
+
+// ----------------------------------------------------------------------------------------------
+// Mitsuba's serialized format: per shape, uint16 0x041C, uint16 version (3 or 4), then a zlib
+// stream: uint32 flags, [v4: NUL-terminated name], uint64 vertex and triangle counts, positions,
+// [normals], [uv], [colours] (float32 or float64 by flag), indices (uint32, or uint64 above 2^32
+// vertices). A file with several shapes ends with their offsets (uint64 in v4, uint32 in v3)
+// and a uint32 count.
+
+namespace {
+
+constexpr uint32_t kSerHasNormals = 0x0001, kSerHasUv = 0x0002, kSerHasColors = 0x0008, kSerFaceNormals = 0x0010,
+                   kSerSingle = 0x1000, kSerDouble = 0x2000;
+constexpr uint64_t kSerMaxElements = uint64_t(1) << 31;  // vertices or triangles per shape
+
+/// Inflates a zlib stream from `data` on demand and refuses reads past its end.
+class Inflater {
+public:
+    Inflater(const std::string& path, const unsigned char* data, size_t size) : path_(path) {
+        std::memset(&z_, 0, sizeof z_);
+        if (inflateInit(&z_) != Z_OK) throw Error(path_ + ": zlib initialisation failed");
+        z_.next_in = const_cast<unsigned char*>(data);
+        z_.avail_in = uInt(std::min<size_t>(size, 0xFFFFFFFFu));
+    }
+    ~Inflater() { inflateEnd(&z_); }
+    void read(void* out, size_t n) {
+        z_.next_out = static_cast<unsigned char*>(out);
+        while (n > 0) {
+            uInt chunk = uInt(std::min<size_t>(n, 1u << 30));
+            z_.avail_out = chunk;
+            int r = inflate(&z_, Z_SYNC_FLUSH);
+            size_t got = chunk - z_.avail_out;
+            n -= got;
+            if (n == 0) break;
+            if (r == Z_STREAM_END || r != Z_OK || got == 0)
+                throw Error(path_ + ": serialized shape data is truncated or corrupt (zlib)");
+        }
+    }
+    template <class T> T get() {
+        T v;
+        read(&v, sizeof v);
+        return v;
+    }
+
+private:
+    std::string path_;
+    z_stream z_;
+};
+
+}  // namespace
+
+TriMesh load_serialized(const std::string& path, int shape_index, bool* face_normals) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot read serialized mesh \"" + path + "\"");
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const unsigned char* b = reinterpret_cast<const unsigned char*>(bytes.data());
+    const size_t n = bytes.size();
+    auto bad = [&](const std::string& why) { return Error(path + ": not a Mitsuba serialized mesh: " + why); };
+    if (n < 4) throw bad("file too short");
+    auto u16 = [&](size_t at) { return uint16_t(b[at] | (b[at + 1] << 8)); };
+    auto u32 = [&](size_t at) { uint32_t v; std::memcpy(&v, b + at, 4); return v; };
+    auto u64 = [&](size_t at) { uint64_t v; std::memcpy(&v, b + at, 8); return v; };
+    if (u16(0) != 0x041C) throw bad("missing the 0x041C header");
+    uint16_t version = u16(2);
+    if (version != 3 && version != 4) throw bad("unsupported version " + std::to_string(version));
+    // shape offsets: the trailing dictionary when there is one, else the only shape at 0
+    size_t offset = 0;
+    uint32_t count = u32(n - 4);
+    size_t entry = version == 4 ? 8 : 4;
+    bool has_dict = count >= 1 && uint64_t(count) * entry + 4 <= n && n >= 8;
+    if (has_dict) {
+        size_t dict = n - 4 - size_t(count) * entry;
+        uint64_t first = version == 4 ? u64(dict) : u32(dict);
+        has_dict = first == 0;  // the first shape starts the file
+        if (has_dict) {
+            if (shape_index < 0 || uint32_t(shape_index) >= count)
+                throw bad("shape_index " + std::to_string(shape_index) + " out of range (the file has " +
+                          std::to_string(count) + " shapes)");
+            uint64_t at = dict + size_t(shape_index) * entry;
+            offset = size_t(version == 4 ? u64(at) : u32(at));
+            if (offset + 4 > dict) throw bad("shape offset out of range");
+        }
+    }
+    if (!has_dict && shape_index != 0) throw bad("the file has one shape, shape_index must be 0");
+    if (u16(offset) != 0x041C || u16(offset + 2) != version) throw bad("shape " + std::to_string(shape_index) + " has no header");
+    Inflater z(path, b + offset + 4, n - offset - 4);
+    uint32_t flags = z.get<uint32_t>();
+    if (version == 4) {
+        for (int i = 0; i < 4096; ++i)
+            if (z.get<char>() == '\0') break;  // the shape's name
+    }
+    uint64_t nv = z.get<uint64_t>(), nt = z.get<uint64_t>();
+    if (nv == 0 || nt == 0 || nv > kSerMaxElements || nt > kSerMaxElements)
+        throw bad("vertex/triangle counts " + std::to_string(nv) + "/" + std::to_string(nt) + " out of range");
+    bool dbl = flags & kSerDouble;
+    if (!(flags & (kSerSingle | kSerDouble))) throw bad("no precision flag");
+    auto reals = [&](size_t k, std::vector<float>* out) {
+        out->resize(k);
+        if (!dbl) {
+            z.read(out->data(), k * sizeof(float));
+        } else {
+            std::vector<double> d(k);
+            z.read(d.data(), k * sizeof(double));
+            for (size_t i = 0; i < k; ++i) (*out)[i] = float(d[i]);
+        }
+        for (float v : *out)
+            if (!std::isfinite(v)) throw bad("non-finite vertex data");
+    };
+    TriMesh m;
+    std::vector<float> tmp;
+    reals(3 * nv, &tmp);
+    m.p.resize(nv);
+    for (size_t i = 0; i < nv; ++i) m.p[i] = Vec3(tmp[3 * i], tmp[3 * i + 1], tmp[3 * i + 2]);
+    if (flags & kSerHasNormals) {
+        reals(3 * nv, &tmp);
+        m.n.resize(nv);
+        for (size_t i = 0; i < nv; ++i) m.n[i] = normalize(Vec3(tmp[3 * i], tmp[3 * i + 1], tmp[3 * i + 2]));
+    }
+    if (flags & kSerHasUv) {
+        reals(2 * nv, &tmp);
+        m.uv.resize(nv);
+        for (size_t i = 0; i < nv; ++i) m.uv[i] = Vec2(tmp[2 * i], tmp[2 * i + 1]);
+    }
+    if (flags & kSerHasColors) reals(3 * nv, &tmp);  // vertex colours: not used
+    m.idx.resize(3 * nt);
+    if (nv <= 0xFFFFFFFFull) {
+        z.read(m.idx.data(), m.idx.size() * sizeof(uint32_t));
+    } else {
+        for (uint32_t& i : m.idx) i = uint32_t(z.get<uint64_t>());
+    }
+    for (uint32_t i : m.idx)
+        if (i >= nv) throw bad("vertex index out of range");
+    *face_normals = flags & kSerFaceNormals;
+    if (*face_normals) m.n.clear();
     return m;
 }
 

@@ -28,5 +28,8 @@ TriMesh load_obj(const std::string& path);
 /// Read a PLY file (ascii or binary_little_endian 1.0): vertex x y z [nx ny nz] [u v | s t |
 /// texture_u texture_v], face vertex_indices (or vertex_index) lists; polygons fan-triangulated.
 TriMesh load_ply(const std::string& path);
+/// Read shape `shape_index` of a Mitsuba serialized file (zlib-compressed, versions 3 and 4).
+/// *face_normals is set when the file asks for flat faces (its normals are then dropped).
+TriMesh load_serialized(const std::string& path, int shape_index, bool* face_normals);
 
 }  // namespace mf

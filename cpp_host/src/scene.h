@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "emitter.h"
+#include "film.h"
 #include "medium.h"
 #include "shape.h"
 
@@ -61,6 +62,8 @@ public:
     IntegratorSettings integrator;
     int spp = 16;
     uint64_t seed = 0;
+    ReconstructionFilter filter;  // Mitsuba's hdrfilm default: gaussian, stddev 0.5
+    uint64_t content_hash = 0;    // of the scene's XML text and -D values (shard compatibility)
     std::vector<std::shared_ptr<const Medium>> media;  // keeps media alive
 
 private:

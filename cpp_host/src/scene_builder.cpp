@@ -23,52 +23,88 @@ class Builder {
 public:
     Builder(const BuildOptions& opts, BuildReport* report) : opts_(opts), report_(report) {}
 
-    std::unique_ptr<Scene> build(const ParsedScene& parsed) {
+    /// Builds everything it can and reports every problem to `errors` (one per object at least:
+    /// an object with a problem is skipped, and objects already reported by the reader, marked
+    /// broken, are skipped quietly). Returns null when there was any problem.
+    std::unique_ptr<Scene> build(const ParsedScene& parsed, ErrorSink& errors) {
         scene_ = std::make_unique<Scene>();
         const SceneObject& root = *parsed.root;
         const SceneObject* sensor = nullptr;
         const SceneObject* integrator = nullptr;
+        bool sensor_seen = false;
         for (const Child& c : root.children) {
             c.used = true;
             const SceneObject& o = *c.obj;
-            if (o.tag == "shape") {
-                build_shape(c.obj);
-            } else if (o.tag == "emitter") {
-                if (o.type == "area")
-                    throw Error(o.loc, o.describe() + ": an area emitter must be nested inside a <shape>");
-                scene_->add_emitter(build_emitter(o, nullptr));
-            } else if (o.tag == "bsdf") {
-                build_bsdf(o);
-            } else if (o.tag == "medium") {
-                build_medium(o);
-            } else if (o.tag == "sensor") {
-                if (sensor) throw Error(o.loc, "only one <sensor> is supported (first at " + sensor->loc.str() + ")");
-                sensor = &o;
-            } else if (o.tag == "integrator") {
-                if (integrator)
-                    throw Error(o.loc, "only one <integrator> is supported (first at " + integrator->loc.str() + ")");
-                integrator = &o;
-            } else {
-                throw Error(o.loc, o.describe() + " is not allowed at the top level of <scene>");
+            if (o.tag == "sensor") sensor_seen = true;
+            try {
+                build_top_level(o, c, &sensor, &integrator);
+            } catch (const AlreadyReported&) {
+            } catch (const Error& e) {
+                errors.add(e);
             }
         }
-        if (!sensor) throw Error(root.loc, "the scene has no <sensor> (mfrender needs a perspective sensor)");
-        build_sensor(*sensor);
-        if (integrator) build_integrator(*integrator);
-        else scene_->integrator = IntegratorSettings{false, -1, 5, false};  // Mitsuba's default: path
+        if (!sensor && !sensor_seen && !root.broken)
+            errors.add(Error(root.loc, "the scene has no <sensor> (mfrender needs a perspective sensor)"));
+        try {
+            if (sensor) build_sensor(*sensor);
+            if (integrator) build_integrator(*integrator);
+            else scene_->integrator = IntegratorSettings{false, -1, 5, false};  // Mitsuba's default: path
+        } catch (const AlreadyReported&) {
+        } catch (const Error& e) {
+            errors.add(e);
+        }
+        if (!errors.empty() || !sensor) return nullptr;
         if (opts_.spp_override > 0) scene_->spp = opts_.spp_override;
         if (opts_.seed_override >= 0) scene_->seed = uint64_t(opts_.seed_override);
         if (opts_.max_depth_override >= -1) scene_->integrator.max_depth = opts_.max_depth_override;
         for (auto& kv : media_) scene_->media.push_back(kv.second);
+        scene_->content_hash = parsed.content_hash;
         scene_->commit();
         return std::move(scene_);
     }
 
 private:
+    /// Thrown for an object whose problem the reader already reported (SceneObject::broken).
+    struct AlreadyReported {};
+    static void skip_if_broken(const SceneObject& o) {
+        if (o.broken) throw AlreadyReported{};
+    }
+
+    void build_top_level(const SceneObject& o, const Child& c, const SceneObject** sensor, const SceneObject** integrator) {
+        {
+            if (o.tag == "shape") {
+                build_shape(c.obj);
+            } else if (o.tag == "emitter") {
+                // A top-level area emitter is built by the shape that references it (Mitsuba's
+                // cbox): nothing to do here.
+                if (o.type != "area") scene_->add_emitter(build_emitter(o, nullptr));
+            } else if (o.tag == "texture") {
+                build_texture(o);
+            } else if (o.tag == "bsdf") {
+                build_bsdf(o);
+            } else if (o.tag == "medium") {
+                build_medium(o);
+            } else if (o.tag == "sensor") {
+                skip_if_broken(o);
+                if (*sensor) throw Error(o.loc, "only one <sensor> is supported (first at " + (*sensor)->loc.str() + ")");
+                *sensor = &o;
+            } else if (o.tag == "integrator") {
+                skip_if_broken(o);
+                if (*integrator)
+                    throw Error(o.loc, "only one <integrator> is supported (first at " + (*integrator)->loc.str() + ")");
+                *integrator = &o;
+            } else {
+                (void)c;
+                throw Error(o.loc, o.describe() + " is not allowed at the top level of <scene>");
+            }
+        }
+    }
+
     const BuildOptions& opts_;
     BuildReport* report_;
     std::unique_ptr<Scene> scene_;
     std::map<const SceneObject*, std::shared_ptr<Bsdf>> bsdfs_;
+    std::map<const SceneObject*, std::shared_ptr<const Texture>> textures_;
     std::map<const SceneObject*, std::shared_ptr<const Medium>> media_;
     std::map<const SceneObject*, std::shared_ptr<const MediumParamBag>> bags_;
 
@@ -78,9 +114,8 @@ private:
     }
 
     std::string resolve_file(const SceneObject& o, const std::string& prop) {
-        std::string f = o.get_string(prop);
-        std::string path = (f.empty() || f[0] == '/' || o.dir == ".") ? f : o.dir + "/" + f;
-        if (!file_exists(path)) throw perr(o, prop, "refers to a missing file \"" + path + "\"");
+        std::string path = o.resolve_path(o.get_string(prop));
+        if (!file_exists(path)) throw perr(o, prop, "refers to a missing file " + quote(path, 200));
         return path;
     }
 
@@ -94,13 +129,14 @@ private:
     std::shared_ptr<Bsdf> build_bsdf(const SceneObject& o) {
         auto it = bsdfs_.find(&o);
         if (it != bsdfs_.end()) return it->second;
+        skip_if_broken(o);
         std::shared_ptr<Bsdf> b;
         const std::string& t = o.type;
         if (t == "diffuse") {
-            b = make_diffuse(nonneg_rgb(o, "reflectance", Rgb(0.5f)));
+            b = make_diffuse(texture_param(o, "reflectance", Rgb(0.5f)));
         } else if (t == "conductor" || t == "roughconductor") {
             ConductorIor ior = conductor_ior(o);
-            Rgb spec = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f));
+            auto spec = texture_param(o, "specular_reflectance", Rgb(1.0f));
             if (t == "conductor") {
                 b = make_conductor(ior, spec);
             } else {
@@ -125,10 +161,19 @@ private:
                     throw perr(o, "shadowing", "must be \"separable\" or \"height_correlated\", got \"" + shadowing + "\"");
                 b = make_rough_conductor(ior, spec, mt, au, av, vis, shadowing == "height_correlated");
             }
-        } else if (t == "dielectric") {
+        } else if (t == "dielectric" || t == "thindielectric") {
             float ni = ior_value(o, "int_ior", "bk7"), ne = ior_value(o, "ext_ior", "air");
-            b = make_dielectric(ni, ne, nonneg_rgb(o, "specular_reflectance", Rgb(1.0f)),
-                                nonneg_rgb(o, "specular_transmittance", Rgb(1.0f)));
+            Rgb r = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f)), tr = nonneg_rgb(o, "specular_transmittance", Rgb(1.0f));
+            b = t == "dielectric" ? make_dielectric(ni, ne, r, tr) : make_thin_dielectric(ni, ne, r, tr);
+        } else if (t == "plastic") {
+            float ni = ior_value(o, "int_ior", "polypropylene"), ne = ior_value(o, "ext_ior", "air");
+            auto diffuse = texture_param(o, "diffuse_reflectance", Rgb(0.5f));
+            Rgb spec = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f));
+            bool nonlinear = o.get_bool("nonlinear", false);
+            // Mitsuba: the specular lobe's sampling weight from the mean reflectances
+            float d_mean = diffuse->constant() ? diffuse->constant()->average() : 0.5f * diffuse->max_value();
+            float s_mean = spec.average();
+            b = make_plastic(ni, ne, diffuse, spec, nonlinear, s_mean + d_mean > 0 ? s_mean / (s_mean + d_mean) : 0.5f);
         } else if (t == "null") {
             b = make_null_bsdf();
         } else if (t == "twosided") {
@@ -140,11 +185,63 @@ private:
             b = make_twosided(f, bk);
         } else {
             throw err(o, "unsupported BSDF plugin \"" + t +
-                             "\" (supported: diffuse, conductor, roughconductor, dielectric, null, twosided)");
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, plastic, null, twosided)");
         }
         o.check_all_used();
         bsdfs_[&o] = b;
         return b;
+    }
+
+    // ------------------------------------------------------------------ textures
+    /// A parameter Mitsuba takes as a texture: a constant property (<rgb>, <float>, <spectrum>),
+    /// a nested <texture name="..."> or a <ref name="..." id="..."/> to a texture.
+    std::shared_ptr<const Texture> texture_param(const SceneObject& o, const std::string& name, const Rgb& def) {
+        const Child* c = o.child_named("texture", name);
+        if (c && o.has(name)) throw err(o, "parameter " + quote(name) + " is given twice (a value and a texture)");
+        if (c) return build_texture(*c->obj);
+        return make_constant_texture(nonneg_rgb(o, name, def));
+    }
+
+    std::shared_ptr<const Texture> build_texture(const SceneObject& t) {
+        auto it = textures_.find(&t);
+        if (it != textures_.end()) return it->second;
+        skip_if_broken(t);
+        UvTransform to_uv = UvTransform::from(t.get_transform("to_uv", Mat4()));
+        std::shared_ptr<const Texture> tex;
+        if (t.type == "checkerboard") {
+            auto c0 = texture_param(t, "color0", Rgb(0.4f)), c1 = texture_param(t, "color1", Rgb(0.2f));
+            tex = make_checkerboard_texture(std::const_pointer_cast<Texture>(c0), std::const_pointer_cast<Texture>(c1), to_uv);
+        } else if (t.type == "bitmap") {
+            std::string path = resolve_file(t, "filename");
+            std::string ft = t.get_string("filter_type", "bilinear"), wm = t.get_string("wrap_mode", "repeat");
+            BitmapFilter f;
+            if (ft == "bilinear") f = BitmapFilter::Bilinear;
+            else if (ft == "nearest") f = BitmapFilter::Nearest;
+            else throw perr(t, "filter_type", "must be bilinear or nearest, got " + quote(ft));
+            WrapMode w;
+            if (wm == "repeat") w = WrapMode::Repeat;
+            else if (wm == "mirror") w = WrapMode::Mirror;
+            else if (wm == "clamp") w = WrapMode::Clamp;
+            else throw perr(t, "wrap_mode", "must be repeat, mirror or clamp, got " + quote(wm));
+            bool raw = t.get_bool("raw", false);
+            std::string format = t.get_string("format", "variant");
+            if (format != "variant" && format != "fp32" && format != "fp16")
+                throw perr(t, "format", "must be variant, fp16 or fp32, got " + quote(format));
+            Image img;
+            try {
+                img = read_texture_image(path, raw);
+            } catch (const Error& e) {
+                throw Error(t.loc, t.describe() + ": " + e.what());
+            }
+            for (float v : img.rgb)
+                if (!(v >= 0) || !std::isfinite(v)) throw err(t, "image " + quote(path, 200) + " has negative or non-finite values");
+            tex = make_bitmap_texture(std::move(img.rgb), img.width, img.height, f, w, to_uv);
+        } else {
+            throw err(t, "unsupported texture plugin " + quote(t.type) + " (supported: bitmap, checkerboard)");
+        }
+        t.check_all_used();
+        textures_[&t] = tex;
+        return tex;
     }
 
     float roughness(const SceneObject& o, const std::string& name) {
@@ -190,6 +287,7 @@ private:
 
     // ------------------------------------------------------------------ media
     std::shared_ptr<PhaseFunction> build_phase(const SceneObject& o) {
+        skip_if_broken(o);
         std::shared_ptr<PhaseFunction> ph;
         if (o.type == "isotropic") {
             ph = std::make_shared<IsotropicPhase>();
@@ -209,6 +307,7 @@ private:
     std::shared_ptr<const MediumParamBag> build_bag(const SceneObject& o) {
         auto it = bags_.find(&o);
         if (it != bags_.end()) return it->second;
+        skip_if_broken(o);
         auto bag = std::make_shared<MediumParamBag>();
         bag->type = o.type;
         bag->id = o.id;
@@ -257,6 +356,7 @@ private:
         }
         auto it = media_.find(&o);
         if (it != media_.end()) return it->second;
+        skip_if_broken(o);
         if (o.type != "homogeneous")
             throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, macrofacet, gpis)");
         Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
@@ -278,41 +378,63 @@ private:
     // ------------------------------------------------------------------ shapes
     void build_shape(const std::shared_ptr<SceneObject>& op) {
         const SceneObject& o = *op;
+        skip_if_broken(o);
         const std::string& t = o.type;
         Mat4 to_world = o.get_transform("to_world", Mat4());
         if (std::fabs(to_world.det3()) < 1e-30) throw perr(o, "to_world", "is singular");
         bool flip = o.get_bool("flip_normals", false);
         std::shared_ptr<Shape> shape;
-        if (t == "obj" || t == "ply") {
+        if (t == "obj" || t == "ply" || t == "serialized") {
             std::string path = resolve_file(o, "filename");
             bool face_normals = o.get_bool("face_normals", false);
-            if (t == "obj") o.get_bool("flip_tex_coords", true);  // accepted, no textures
+            long long shape_index = t == "serialized" ? o.get_int("shape_index", 0) : 0;
+            if (shape_index < 0 || shape_index > (1 << 30)) throw perr(o, "shape_index", "must be >= 0");
+            bool flip_tc = t == "obj" && o.get_bool("flip_tex_coords", true);
             TriMesh m;
             try {
-                m = t == "obj" ? load_obj(path) : load_ply(path);
+                bool file_face_normals = false;
+                if (t == "serialized") m = load_serialized(path, int(shape_index), &file_face_normals);
+                else m = t == "obj" ? load_obj(path) : load_ply(path);
+                face_normals = face_normals || file_face_normals;
             } catch (const Error& e) {
                 throw Error(o.loc, o.describe() + ": " + e.what());
             }
+            if (flip_tc)  // Mitsuba's OBJ loader: v -> 1 - v unless flip_tex_coords is false
+                for (Vec2& q : m.uv) q.y = 1.0f - q.y;
             if (face_normals) m.make_face_normals();
             m.transform(to_world);
             if (!face_normals && m.n.empty()) m.compute_vertex_normals();
             if (flip) m.flip_normals();
-            shape = std::make_shared<MeshShape>(std::move(m), t);
+            shape = std::make_shared<MeshShape>(std::move(m), t, flip);
         } else if (t == "sphere") {
             Vec3 c = o.get_point("center", Vec3(0.0f));
             float r = o.get_float("radius", 1.0f);
             if (!(r > 0)) throw perr(o, "radius", "must be positive");
             double s = to_world.similarity_scale(1e-4);
             if (s < 0) throw perr(o, "to_world", "of a sphere must be a similarity (rotation, uniform scale, translation)");
-            shape = std::make_shared<SphereShape>(to_world.point(c), float(r * s), flip, to_world.vector(Vec3(0, 0, 1)));
+            Mat4 rot = to_world * Mat4::scale(1.0 / s, 1.0 / s, 1.0 / s);  // object frame for uv, dp/du
+            rot.m[0][3] = rot.m[1][3] = rot.m[2][3] = 0.0;
+            shape = std::make_shared<SphereShape>(to_world.point(c), float(r * s), flip, rot);
         } else if (t == "rectangle" || t == "cube" || t == "disk") {
             TriMesh m = t == "rectangle" ? make_rectangle_mesh() : (t == "cube" ? make_cube_mesh() : make_disk_mesh());
             m.transform(to_world);
             if (flip) m.flip_normals();
-            auto ms = std::make_shared<MeshShape>(std::move(m), t);
+            auto ms = std::make_shared<MeshShape>(std::move(m), t, flip);
+            if (t == "disk") {
+                // Mitsuba's disk: uv = (r, phi / 2 pi), dp/du = to_world * (cos phi, sin phi, 0)
+                Mat4 inv = to_world.inverse();
+                ms->set_parameterization([=](const Vec3& p, Vec2* uv, Vec3* dpdu) {
+                    Vec3 l = inv.point(p);
+                    float r = std::sqrt(l.x * l.x + l.y * l.y);
+                    float v = std::atan2(l.y, l.x) * (0.5f * kInvPi);
+                    if (v < 0) v += 1.0f;
+                    *uv = Vec2(r, v);
+                    *dpdu = to_world.vector(r > 0 ? Vec3(l.x / r, l.y / r, 0.0f) : Vec3(1, 0, 0));
+                });
+            }
             shape = ms;
         } else {
-            throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, sphere, rectangle, cube, disk)");
+            throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk)");
         }
         shape->id = o.id;
         shape->loc = o.loc;
@@ -383,6 +505,7 @@ private:
 
     // ------------------------------------------------------------------ emitters
     std::shared_ptr<Emitter> build_emitter(const SceneObject& o, const Shape* shape) {
+        skip_if_broken(o);
         std::shared_ptr<Emitter> e;
         const std::string& t = o.type;
         if (t == "area") {
@@ -429,10 +552,28 @@ private:
         if (o.type != "perspective") throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective)");
         Camera& cam = scene_->camera;
         cam.to_world = o.get_transform("to_world", Mat4());
-        if (!o.has("fov")) throw err(o, "missing required parameter \"fov\" (focal_length is not supported)");
-        float fov = o.get_float("fov");
-        if (!(fov > 0 && fov < 180)) throw perr(o, "fov", "must lie in (0, 180) degrees");
-        std::string axis = o.get_string("fov_axis", "x");
+        // Mitsuba's parse_fov: fov along fov_axis, or a focal length on 35 mm film (36 x 24 mm),
+        // i.e. a diagonal fov of 2 atan(sqrt(36^2 + 24^2) / (2 f)); default focal_length 50mm.
+        if (o.has("fov") && o.has("focal_length")) throw err(o, "specify either fov or focal_length, not both");
+        float fov;
+        std::string axis;
+        if (o.has("fov")) {
+            fov = o.get_float("fov");
+            if (!(fov > 0 && fov < 180)) throw perr(o, "fov", "must lie in (0, 180) degrees");
+            axis = o.get_string("fov_axis", "x");
+        } else {
+            std::string fl = o.get_string("focal_length", "50mm");
+            std::string num = fl.size() > 2 && fl.compare(fl.size() - 2, 2, "mm") == 0 ? fl.substr(0, fl.size() - 2) : fl;
+            char* end = nullptr;
+            double f = std::strtod(num.c_str(), &end);
+            if (num.empty() || *end || !(f > 0) || !std::isfinite(f))
+                throw perr(o, "focal_length", "must be a positive length in mm such as \"50mm\", got " + quote(fl));
+            fov = float(2.0 * std::atan(std::sqrt(36.0 * 36.0 + 24.0 * 24.0) / (2.0 * f)) * 180.0 / 3.14159265358979323846);
+            axis = "diagonal";
+            if (o.has("fov_axis")) o.get_string("fov_axis", "x");  // Mitsuba ignores it with focal_length
+        }
+        // Mitsuba's perspective (pinhole) reads and ignores focus_distance (only thinlens uses it)
+        if (!(o.get_float("focus_distance", 1.0f) > 0)) throw perr(o, "focus_distance", "must be positive");
         cam.near_clip = o.get_float("near_clip", 1e-2f);
         cam.far_clip = o.get_float("far_clip", 1e4f);
         if (!(cam.near_clip > 0 && cam.far_clip > cam.near_clip)) throw err(o, "needs 0 < near_clip < far_clip");
@@ -458,9 +599,20 @@ private:
             if (rf.size() > 1) throw Error(f.loc, f.describe() + ": more than one rfilter");
             if (!rf.empty()) {
                 const SceneObject& r = *rf[0]->obj;
-                if (r.type == "gaussian") r.get_float("stddev", 0.5f);  // rendered as a box filter
-                else if (r.type != "box")
-                    throw Error(r.loc, r.describe() + ": unsupported reconstruction filter (supported: box, gaussian=box)");
+                skip_if_broken(r);
+                if (r.type == "gaussian") {
+                    float sd = r.get_float("stddev", 0.5f);
+                    if (!(sd > 0 && sd <= 16)) throw perr(r, "stddev", "must lie in (0, 16] pixels");
+                    scene_->filter = ReconstructionFilter::gaussian(sd);
+                } else if (r.type == "tent") {
+                    float rad = r.get_float("radius", 1.0f);
+                    if (!(rad > 0 && rad <= 64)) throw perr(r, "radius", "must lie in (0, 64] pixels");
+                    scene_->filter = ReconstructionFilter::tent(rad);
+                } else if (r.type == "box") {
+                    scene_->filter = ReconstructionFilter::box();
+                } else {
+                    throw Error(r.loc, r.describe() + ": unsupported reconstruction filter (supported: gaussian, tent, box)");
+                }
                 r.check_all_used();
             }
             f.check_all_used();
@@ -526,29 +678,44 @@ private:
 
 }  // namespace
 
-std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report) {
+std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report,
+                                   ErrorSink* errors) {
     Builder b(opts, report);
-    return b.build(parsed);
+    ErrorSink local;
+    std::unique_ptr<Scene> scene = b.build(parsed, errors ? *errors : local);
+    local.raise();
+    if (!scene && errors && errors->empty()) throw Error("the scene could not be built");
+    return scene;
 }
 
 const char* supported_subset_text() {
-    return R"(Supported Mitsuba 3 XML subset (<scene version="3.x.x">):
-  structure   <default name value>, $name substitution, -D name=value, <include filename>,
-              id="..." and <ref id="..."/> / <ref name="..." id="..."/>
+    return R"(Supported Mitsuba 3 XML subset (<scene version="x.y.z">, 0.x-3.x; pre-2.0 scenes are upgraded
+in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
+  structure   <default name value>, $name substitution, -D name=value, <include filename> (anywhere),
+              <path value> (resolver order: <path> folders latest first, the scene's folder, the
+              including file's folder, the working directory), id="..." and <ref id>/<ref name id>
+              (forward references too), <alias id as>
   properties  integer float boolean string rgb vector point transform
-              spectrum (a single constant value only -> grey RGB)
-  transforms  translate (x,y,z | value), rotate (axis x,y,z | value + angle in degrees),
-              scale (value | x,y,z), matrix (16 values, row-major), lookat (origin,target,up);
-              each operation is applied after the previous ones (Mitsuba's order)
-  shapes      obj, ply (ascii / binary_little_endian), sphere (center, radius), rectangle,
-              cube, disk; to_world, flip_normals, face_normals (obj/ply); nested bsdf,
-              area emitter, <medium name="interior|exterior">
-  bsdfs       diffuse (reflectance), conductor (material | eta,k; specular_reflectance),
+              spectrum (a single constant value -> grey RGB; wavelength lists are refused)
+              <rgb> outside emitters must lie in [0, 1] (Mitsuba's RGB variants refuse it) except
+              eta, k, int_ior, ext_ior: use <float> or rgb with a scale (e.g. sigma_t)
+  transforms  translate, rotate (axis as given, like Mitsuba: a non-unit axis also scales), scale,
+              matrix (16 or 9 values, row-major), lookat (origin, target, up; without up: the
+              first axis of Mitsuba's coordinate_system(direction)); applied in order
+  shapes      obj (flip_tex_coords), ply (ascii / binary_little_endian), serialized (shape_index;
+              zlib), sphere (center, radius), rectangle, cube, disk; to_world, flip_normals,
+              face_normals; nested or referenced bsdf, area emitter (nested, or a top-level
+              <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
+              uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)
+  textures    wherever listed below as (tex): a constant, <texture type="checkerboard"> (color0,
+              color1, to_uv) or <texture type="bitmap"> (filename .png/.jpg/.exr, filter_type
+              bilinear|nearest, wrap_mode repeat|mirror|clamp, raw, to_uv), nested with
+              name="param" or <ref name="param" id>
+  bsdfs       diffuse (reflectance (tex)), conductor (material | eta,k; specular_reflectance (tex)),
               roughconductor (distribution beckmann|ggx, alpha | alpha_u,alpha_v, material |
-              eta,k, sample_visible; mfrender extension: shadowing separable (default,
-              Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o))),
-              dielectric (int_ior, ext_ior: number or name),
-              null, twosided (one or two nested bsdfs)
+              eta,k, specular_reflectance (tex), sample_visible; mfrender extension: shadowing
+              separable (default, Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o))),
+              dielectric (int_ior, ext_ior: number or name), null, twosided (one or two bsdfs)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
               macrofacet (as the interior of its mean-surface shape; parameters as in the
@@ -562,11 +729,21 @@ const char* supported_subset_text() {
   emitters    area (radiance), point (position | to_world, intensity), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)
-  sensor      perspective (fov, fov_axis, to_world, near_clip, far_clip) with
-              hdrfilm (width, height, rfilter box | gaussian [rendered as box]) and
+  sensor      perspective (fov + fov_axis x|y|diagonal|smaller|larger, or focal_length such as
+              "50mm" on 35 mm film (Mitsuba's default when neither is given), focus_distance
+              (read, no effect on a pinhole), to_world, near_clip, far_clip) with hdrfilm (width,
+              height, rfilter gaussian (stddev; the default, 0.5) | tent (radius) | box) and
               independent sampler (sample_count, seed)
   integrators volpath, path (max_depth, rr_depth, hide_emitters)
-Unknown elements, plugin types or parameters are errors.
+Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
+Not supported (refused with the element's file:line): other plugins, e.g. plastic,
+roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
+normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media, gridvolume,
+spectra from files or wavelength lists.
+Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
+15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only
+(devices and pipes are refused); an attribute at most 1 MiB after $substitution; at most 100
+problems are listed; values echoed in messages are cut to 64 characters.
 )";
 }
 

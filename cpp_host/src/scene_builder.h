@@ -31,7 +31,10 @@ struct BuildReport {
     std::vector<MacrofacetUse> macrofacet;
 };
 
-std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report);
+/// Without `errors`, throws every problem (mf::Error or mf::ErrorList); with it, adds them there
+/// and returns null if there was any (the caller reports them all at once).
+std::unique_ptr<Scene> build_scene(const ParsedScene& parsed, const BuildOptions& opts, BuildReport* report,
+                                   ErrorSink* errors = nullptr);
 
 /// The plugin subset, as printed by `mfrender --help`.
 const char* supported_subset_text();

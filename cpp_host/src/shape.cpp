@@ -8,7 +8,8 @@ namespace mf {
 // ----------------------------------------------------------------------------------------------
 // MeshShape
 
-MeshShape::MeshShape(TriMesh mesh, std::string kind) : mesh_(std::move(mesh)), kind_(std::move(kind)) {
+MeshShape::MeshShape(TriMesh mesh, std::string kind, bool winding_flipped)
+    : mesh_(std::move(mesh)), kind_(std::move(kind)) {
     for (const Vec3& q : mesh_.p) bounds_.expand(q);
     cdf_.resize(mesh_.num_triangles());
     double acc = 0;
@@ -20,6 +21,40 @@ MeshShape::MeshShape(TriMesh mesh, std::string kind) : mesh_(std::move(mesh)), k
         cdf_[t] = float(acc);
     }
     area_ = float(acc);
+
+    // dp/du per triangle, Mitsuba 3's mesh rule (Mesh::compute_surface_interaction): from the
+    // uv parameterization where it is non-degenerate, else the first axis of the coordinate
+    // system of the face normal (taken before flip_normals).
+    dpdu_.resize(mesh_.num_triangles());
+    for (size_t t = 0; t < mesh_.num_triangles(); ++t) {
+        uint32_t i0 = mesh_.idx[3 * t], i1 = mesh_.idx[3 * t + 1], i2 = mesh_.idx[3 * t + 2];
+        Vec3 dp0 = mesh_.p[i1] - mesh_.p[i0], dp1 = mesh_.p[i2] - mesh_.p[i0];
+        Vec3 ng = normalize(cross(dp0, dp1)) * (winding_flipped ? -1.0f : 1.0f);
+        Vec3 d = Frame(ng).s;
+        if (!mesh_.uv.empty()) {
+            Vec2 duv0(mesh_.uv[i1].x - mesh_.uv[i0].x, mesh_.uv[i1].y - mesh_.uv[i0].y);
+            Vec2 duv1(mesh_.uv[i2].x - mesh_.uv[i0].x, mesh_.uv[i2].y - mesh_.uv[i0].y);
+            float det = duv0.x * duv1.y - duv0.y * duv1.x;
+            if (det != 0) d = (dp0 * duv1.y - dp1 * duv0.y) / det;
+        }
+        dpdu_[t] = d;
+    }
+    uniform_dpdu_ = !dpdu_.empty();
+    for (const Vec3& d : dpdu_)
+        if (d.x != dpdu_[0].x || d.y != dpdu_[0].y || d.z != dpdu_[0].z) uniform_dpdu_ = false;
+}
+
+Vec3 MeshShape::dpdu(const Vec3& p, const Vec3& n, uint32_t prim) const {
+    if (param_) {
+        Vec2 uv;
+        Vec3 d;
+        param_(p, &uv, &d);
+        return d;
+    }
+    if (prim < dpdu_.size()) return dpdu_[prim];
+    if (uniform_dpdu_) return dpdu_[0];
+    // Triangle unknown: Mitsuba's rule for meshes without uv, applied to the caller's normal.
+    return Frame(n).s;
 }
 
 void MeshShape::sample_position(const Vec2& u, Vec3* p, Vec3* n) const {
@@ -72,11 +107,16 @@ void MeshShape::fill_hit(const Ray& ray, float t, unsigned prim, float u, float 
     } else {
         hit->ns = hit->ng;
     }
-    if (!mesh_.uv.empty()) {
-        hit->uv = Vec2(mesh_.uv[i0].x * (1 - u - v) + mesh_.uv[i1].x * u + mesh_.uv[i2].x * v,
-                       mesh_.uv[i0].y * (1 - u - v) + mesh_.uv[i1].y * u + mesh_.uv[i2].y * v);
+    if (param_) {
+        param_(hit->p, &hit->uv, &hit->dpdu);
     } else {
-        hit->uv = Vec2(u, v);
+        if (!mesh_.uv.empty()) {
+            hit->uv = Vec2(mesh_.uv[i0].x * (1 - u - v) + mesh_.uv[i1].x * u + mesh_.uv[i2].x * v,
+                           mesh_.uv[i0].y * (1 - u - v) + mesh_.uv[i1].y * u + mesh_.uv[i2].y * v);
+        } else {
+            hit->uv = Vec2(u, v);  // Mitsuba: the barycentrics
+        }
+        hit->dpdu = dpdu_[prim];
     }
     hit->shape = this;
     hit->prim = prim;
@@ -132,6 +172,20 @@ unsigned SphereShape::attach(RTCDevice device, RTCScene scene) const {
     return UserGeometry<SphereShape, sphere_hit>::attach(device, scene, this);
 }
 
+Vec3 SphereShape::local_dir(const Vec3& p) const {
+    Vec3 d = p - c_;
+    // rot_ is orthonormal: its transpose maps world to object space
+    Vec3 l(float(rot_.m[0][0] * d.x + rot_.m[1][0] * d.y + rot_.m[2][0] * d.z),
+           float(rot_.m[0][1] * d.x + rot_.m[1][1] * d.y + rot_.m[2][1] * d.z),
+           float(rot_.m[0][2] * d.x + rot_.m[1][2] * d.y + rot_.m[2][2] * d.z));
+    return normalize(l);
+}
+
+Vec3 SphereShape::dpdu(const Vec3& p, const Vec3&, uint32_t) const {
+    Vec3 l = local_dir(p);
+    return rot_.vector(Vec3(-l.y, l.x, 0.0f)) * (2.0f * kPi * r_);
+}
+
 void SphereShape::fill_hit(const Ray& ray, float t, unsigned prim, float, float, SurfaceHit* hit) const {
     Vec3 p = ray.at(t);
     Vec3 n = normalize(p - c_);
@@ -139,7 +193,12 @@ void SphereShape::fill_hit(const Ray& ray, float t, unsigned prim, float, float,
     hit->p = c_ + n * r_;  // re-project onto the surface
     hit->ng = flip_ ? -n : n;
     hit->ns = hit->ng;
-    hit->uv = Vec2(std::atan2(n.y, n.x) * (0.5f * kInvPi) + 0.5f, std::acos(std::clamp(n.z, -1.0f, 1.0f)) * kInvPi);
+    // Mitsuba's sphere: u = azimuth / 2 pi in [0, 1), v = polar angle / pi, in the object frame
+    Vec3 l = local_dir(hit->p);
+    float u = std::atan2(l.y, l.x) * (0.5f * kInvPi);
+    if (u < 0) u += 1.0f;
+    hit->uv = Vec2(u, std::acos(std::clamp(l.z, -1.0f, 1.0f)) * kInvPi);
+    hit->dpdu = rot_.vector(Vec3(-l.y, l.x, 0.0f)) * (2.0f * kPi * r_);
     hit->shape = this;
     hit->prim = prim;
 }
@@ -149,20 +208,21 @@ void SphereShape::fill_hit(const Ray& ray, float t, unsigned prim, float, float,
 
 TriMesh make_cube_mesh() {
     TriMesh m;
-    const Vec3 normals[6] = {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(0, 0, -1)};
-    for (const Vec3& n : normals) {
-        // tangent frame (s, t) with s x t = n so that the winding is counter-clockwise seen from outside
-        Vec3 s = std::fabs(n.x) > 0 ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
-        Vec3 t = cross(n, s);
-        s = cross(t, n);
+    // Mitsuba 3's cube: per face, u = (a.p + 1) / 2 and v = (b.p + 1) / 2 (read off its uv and
+    // dp/du; dp/du = 2a). a x b = -n, so the triangles run (0, 2, 1), (0, 3, 2) to face outwards.
+    struct Face { Vec3 n, a, b; };
+    const Face faces[6] = {{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, -1)},  {Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)},
+                           {Vec3(0, 1, 0), Vec3(-1, 0, 0), Vec3(0, 0, -1)}, {Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(1, 0, 0)},
+                           {Vec3(0, 0, 1), Vec3(0, 1, 0), Vec3(1, 0, 0)},   {Vec3(0, 0, -1), Vec3(0, -1, 0), Vec3(1, 0, 0)}};
+    for (const Face& f : faces) {
         uint32_t base = uint32_t(m.p.size());
         const float cu[4] = {-1, 1, 1, -1}, cv[4] = {-1, -1, 1, 1};
         for (int k = 0; k < 4; ++k) {
-            m.p.push_back(n + s * cu[k] + t * cv[k]);
-            m.n.push_back(n);
+            m.p.push_back(f.n + f.a * cu[k] + f.b * cv[k]);
+            m.n.push_back(f.n);
             m.uv.push_back(Vec2(0.5f * (cu[k] + 1), 0.5f * (cv[k] + 1)));
         }
-        const uint32_t tri[6] = {0, 1, 2, 0, 2, 3};
+        const uint32_t tri[6] = {0, 2, 1, 0, 3, 2};
         for (uint32_t k : tri) m.idx.push_back(base + k);
     }
     return m;

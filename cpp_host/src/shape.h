@@ -29,7 +29,9 @@ struct SurfaceHit {
     Vec3 p;
     Vec3 ng;  // unit geometric normal (after flip_normals; the "outside" side)
     Vec3 ns;  // unit shading normal
-    Vec2 uv;
+    Vec2 uv;   // Mitsuba 3's texture coordinates of the shape
+    Vec3 dpdu; // Mitsuba 3's dp/du (world space, not normalised; zero = none): the shading frame's
+               // tangent s, along which alpha_u runs, is this made orthogonal to ns (Frame::shading)
     const Shape* shape = nullptr;
     uint32_t prim = 0;
 };
@@ -37,6 +39,21 @@ struct SurfaceHit {
 class Shape {
 public:
     virtual ~Shape() = default;
+    /// Mitsuba 3's dp/du (world space, not normalised) at a point p on or near the surface, for
+    /// the anisotropic tangent of a local frame with unit normal n: Frame::shading(n, dpdu(...)).
+    /// `prim` is the triangle when known (SurfaceHit::prim), else kNoPrim. Cheap (no search):
+    ///   sphere     to_world * (-y, x, 0) * 2 pi of the local point (x, y, z) (Mitsuba's sphere);
+    ///   rectangle  to_world * (2, 0, 0);  disk  to_world * (cos phi, sin phi, 0) (radial);
+    ///   cube / meshes with uv  from the triangle's uv (Mitsuba's mesh rule);
+    ///   meshes without uv, or a mesh point with prim = kNoPrim whose triangles differ: the
+    ///   first axis of Frame(face normal) resp. Frame(n) (Mitsuba: coordinate_system(n)).
+    /// The default is that last rule for any shape.
+    virtual Vec3 dpdu(const Vec3& p, const Vec3& n, uint32_t prim) const {
+        (void)p;
+        (void)prim;
+        return Frame(n).s;
+    }
+    static constexpr uint32_t kNoPrim = ~0u;
     virtual Aabb bounds() const = 0;
     virtual float surface_area() const = 0;
     /// Uniform sampling by area: position and unit normal (pdf = 1 / surface_area()).
@@ -65,8 +82,10 @@ public:
 
 class MeshShape final : public Shape {
 public:
-    /// `mesh` must already be in world space with its final orientation.
-    MeshShape(TriMesh mesh, std::string kind);
+    /// `mesh` must already be in world space with its final orientation. `winding_flipped`: the
+    /// winding was reversed (flip_normals) after Mitsuba would have taken its face normals for
+    /// dp/du (meshes without uv).
+    MeshShape(TriMesh mesh, std::string kind, bool winding_flipped = false);
     Aabb bounds() const override { return bounds_; }
     float surface_area() const override { return area_; }
     void sample_position(const Vec2& u, Vec3* p, Vec3* n) const override;
@@ -74,6 +93,11 @@ public:
     void fill_hit(const Ray& ray, float t, unsigned prim, float u, float v, SurfaceHit* hit) const override;
     std::string kind() const override { return kind_; }
     const TriMesh& mesh() const { return mesh_; }
+    /// Analytic texture coordinates and dp/du of a world point (disk: Mitsuba's (r, phi / 2 pi),
+    /// which no per-vertex interpolation can represent); overrides the mesh's uv and dp/du.
+    using Parameterization = std::function<void(const Vec3& p, Vec2* uv, Vec3* dpdu)>;
+    void set_parameterization(Parameterization f) { param_ = std::move(f); }
+    Vec3 dpdu(const Vec3& p, const Vec3& n, uint32_t prim) const override;
 
 private:
     TriMesh mesh_;
@@ -81,13 +105,17 @@ private:
     Aabb bounds_;
     float area_ = 0;
     std::vector<float> cdf_;  // cumulative triangle areas
+    Parameterization param_;
+    std::vector<Vec3> dpdu_;  // per triangle (Mitsuba's mesh rule)
+    bool uniform_dpdu_ = false;  // all triangles share dpdu_[0] (rectangle, planar uv)
 };
 
 class SphereShape final : public Shape {
 public:
-    /// `pole`: the object's +z axis in world space (Mitsuba's u runs around it).
-    SphereShape(const Vec3& center, float radius, bool flip, const Vec3& pole = Vec3(0, 0, 1))
-        : c_(center), r_(radius), flip_(flip), pole_(normalize(pole)) {}
+    /// `rotation`: the rotation part of Mitsuba's to_world (object frame for uv and dp/du).
+    SphereShape(const Vec3& center, float radius, bool flip, const Mat4& rotation = Mat4())
+        : c_(center), r_(radius), flip_(flip), rot_(rotation) {}
+    Vec3 dpdu(const Vec3& p, const Vec3& n, uint32_t prim) const override;
     Aabb bounds() const override;
     float surface_area() const override { return 4.0f * kPi * r_ * r_; }
     void sample_position(const Vec2& u, Vec3* p, Vec3* n) const override;
@@ -97,19 +125,22 @@ public:
     const Vec3& center() const { return c_; }
     float radius() const { return r_; }
     bool flipped() const { return flip_; }
-    const Vec3& pole() const { return pole_; }
+    /// The object's +z axis in world space: Mitsuba's u runs around it.
+    Vec3 pole() const { return normalize(rot_.vector(Vec3(0, 0, 1))); }
     /// Exact ray–sphere intersection in double precision; smallest root in (tnear, tfar).
     bool intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float* t) const;
 
 private:
+    /// Local unit direction of world point p (Mitsuba's to_object(p), normalised).
+    Vec3 local_dir(const Vec3& p) const;
     Vec3 c_;
     float r_;
     bool flip_;
-    Vec3 pole_;
+    Mat4 rot_;
 };
 
 /// Mitsuba's canonical meshes (local space).
-TriMesh make_cube_mesh();       // [-1,1]^3, outward normals, per-face vertices
+TriMesh make_cube_mesh();       // [-1,1]^3, outward normals, per-face vertices, Mitsuba's uv
 TriMesh make_rectangle_mesh();  // [-1,1]^2 at z = 0, normal +z
 TriMesh make_disk_mesh(int segments = 256);  // unit disk at z = 0, normal +z
 TriMesh make_sphere_mesh(int rings, int segments);  // unit sphere tessellation (tests)

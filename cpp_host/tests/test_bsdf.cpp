@@ -63,7 +63,7 @@ TEST_CASE(microfacet_consistency) {
     const int N = 200000;
     for (const Config& c : cfgs) {
         Microfacet mf(c.t, c.au, c.av, c.vis);
-        auto bsdf = make_rough_conductor(none, Rgb(1.0f), c.t, c.au, c.av, c.vis);
+        auto bsdf = make_rough_conductor(none, make_constant_texture(Rgb(1.0f)), c.t, c.au, c.av, c.vis);
         for (const Vec3& wi : wis) {
             Est normD, normV, alb_s, alb_u;
             int pdf_mismatch = 0;

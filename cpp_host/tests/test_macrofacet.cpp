@@ -436,7 +436,7 @@ static const char* kSmallScene = R"(
       <float name="alpha" value="0.5"/><float name="alpha_z" value="0.25"/><string name="material" value="Cu"/></medium>
     <shape type="sphere"><point name="center" x="-0.45" y="0" z="0"/><float name="radius" value="0.4"/><ref name="interior" id="mf"/></shape>
     <shape type="sphere"><point name="center" x="0.45" y="0" z="0"/><float name="radius" value="0.4"/><bsdf type="null"/>
-      <medium type="homogeneous" name="interior"><rgb name="sigma_t" value="3, 4, 5"/><rgb name="albedo" value="0.9"/>
+      <medium type="homogeneous" name="interior"><rgb name="sigma_t" value="0.6, 0.8, 1"/><float name="scale" value="5"/><rgb name="albedo" value="0.9"/>
       <phase type="hg"><float name="g" value="0.4"/></phase></medium></shape>
     <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><lookat origin="0, 1.5, 2" target="0, 0, 0" up="0, 0, 1"/></transform>
       <emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>

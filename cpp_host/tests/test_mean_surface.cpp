@@ -85,14 +85,14 @@ static double box_sdf(const Vec3& p, double h) {
 TEST_CASE(transformed_cube_is_the_exact_box) {
     const char* xml = R"(<scene version="3.0.0">
       <sensor type="perspective"><float name="fov" value="30"/></sensor>
-      <shape type="cube"><transform name="to_world"><scale value="1.7"/><rotate x="1" y="2" z="0.5" angle="33"/>
+      <shape type="cube"><transform name="to_world"><scale value="1.7"/><rotate x="0.48" y="0.6" z="0.64" angle="33"/>
         <translate x="0.3" y="-1" z="2"/></transform></shape>
     </scene>)";
     auto scene = build_scene(parse_scene_string(xml, "t.xml", {}), BuildOptions(), nullptr);
     const Shape& cube = *scene->shapes().at(0);
     auto s = MeanSurface::of(cube);
     // Mitsuba's order: each operation left-multiplies.
-    Mat4 to_world = Mat4::translate(0.3, -1, 2) * Mat4::rotate(1, 2, 0.5, 33) * Mat4::scale(1.7, 1.7, 1.7);
+    Mat4 to_world = Mat4::translate(0.3, -1, 2) * Mat4::rotate(0.48, 0.6, 0.64, 33) * Mat4::scale(1.7, 1.7, 1.7);
     Mat4 to_local = to_world.inverse();
     std::mt19937 rng(11);
     int bad = 0;
@@ -107,8 +107,12 @@ TEST_CASE(transformed_cube_is_the_exact_box) {
 }
 
 TEST_CASE(sphere_tangent_is_mitsubas_dpdu) {
+    // A sphere rotated so that its object +z (the pole of Mitsuba's u) is `pole`.
     const Vec3 c(1, 0.5f, -2), pole = normalize(Vec3(0.3f, -0.2f, 1));
-    SphereShape sphere(c, 2.0f, false, pole);
+    const Vec3 axis = cross(Vec3(0, 0, 1), pole);
+    const Mat4 rot = Mat4::rotate(axis.x, axis.y, axis.z, std::acos(double(pole.z)) * 180.0 / M_PI);
+    SphereShape sphere(c, 2.0f, false, rot);
+    CHECK_NEAR(dot(sphere.pole(), pole), 1, 1e-6);
     auto s = MeanSurface::of(sphere);
     std::mt19937 rng(5);
     for (int i = 0; i < 200; ++i) {
@@ -120,7 +124,7 @@ TEST_CASE(sphere_tangent_is_mitsubas_dpdu) {
         CHECK(dot(tangent, dpdu) > 0);
         CHECK_NEAR(dot(normal, normalize(p - c)), 1, 1e-6);
     }
-    SphereShape flipped(c, 2.0f, true, pole);  // inward normals: the outside is the interior
+    SphereShape flipped(c, 2.0f, true, rot);  // inward normals: the outside is the interior
     CHECK_NEAR(MeanSurface::of(flipped)->eval(c, nullptr, nullptr), 2.0, 1e-6);
 }
 

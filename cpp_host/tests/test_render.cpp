@@ -28,9 +28,9 @@ static void furnace(const std::string& name, const std::string& object, int spp,
 
 TEST_CASE(white_furnace) {
     furnace("furnace_iso", R"(<shape type="sphere"><bsdf type="null"/>
-        <medium type="homogeneous" name="interior"><rgb name="sigma_t" value="2"/><rgb name="albedo" value="1"/></medium></shape>)", 64);
+        <medium type="homogeneous" name="interior"><float name="sigma_t" value="2"/><rgb name="albedo" value="1"/></medium></shape>)", 64);
     furnace("furnace_chroma_hg", R"(<shape type="sphere"><bsdf type="null"/>
-        <medium type="homogeneous" name="interior"><rgb name="sigma_t" value="0.5, 2, 5"/><rgb name="albedo" value="1"/>
+        <medium type="homogeneous" name="interior"><rgb name="sigma_t" value="0.1, 0.4, 1"/><float name="scale" value="5"/><rgb name="albedo" value="1"/>
         <phase type="hg"><float name="g" value="0.6"/></phase></medium></shape>)", 64);
     furnace("furnace_mesh_cube_medium", R"(<shape type="cube"><transform name="to_world"><rotate x="1" y="1" angle="40"/><scale value="0.7"/></transform>
         <bsdf type="null"/><medium type="homogeneous" name="interior"><float name="sigma_t" value="3"/><float name="albedo" value="1"/>
@@ -38,28 +38,29 @@ TEST_CASE(white_furnace) {
     furnace("furnace_diffuse", R"(<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1"/></bsdf></shape>)", 64);
     furnace("furnace_glass", R"(<shape type="sphere"><bsdf type="dielectric"><float name="int_ior" value="1.5"/></bsdf></shape>)", 64);
     furnace("furnace_glass_with_medium", R"(<shape type="sphere"><bsdf type="dielectric"/>
-        <medium type="homogeneous" name="interior"><rgb name="sigma_t" value="1.5"/><rgb name="albedo" value="1"/></medium></shape>)", 64);
+        <medium type="homogeneous" name="interior"><float name="sigma_t" value="1.5"/><rgb name="albedo" value="1"/></medium></shape>)", 64);
 }
 
-static const char* slab_object(const char* sigma) {
+/// sigma_t = rgb * scale (Mitsuba's RGB variants keep an <rgb> outside emitters within [0, 1]).
+static const char* slab_object(const char* rgb, const char* scale) {
     static std::string s;
     s = std::string(R"(<shape type="cube"><transform name="to_world"><scale x="20" y="20" z="0.25"/></transform><bsdf type="null"/>
-        <medium type="homogeneous" name="interior"><rgb name="sigma_t" value=")") + sigma +
-        R"("/><rgb name="albedo" value="0"/></medium></shape>)";
+        <medium type="homogeneous" name="interior"><rgb name="sigma_t" value=")") + rgb + R"("/><float name="scale" value=")" +
+        scale + R"("/><rgb name="albedo" value="0"/></medium></shape>)";
     return s.c_str();
 }
 
 TEST_CASE(homogeneous_slab) {
     const double d = 0.5;
-    struct Case { const char* sigma; double s[3]; };
-    const Case cases[] = {{"2", {2, 2, 2}}, {"0.5, 1.5, 4", {0.5, 1.5, 4}}};
+    struct Case { const char* sigma; const char* scale; double s[3]; };
+    const Case cases[] = {{"1", "2", {2, 2, 2}}, {"0.125, 0.375, 1", "4", {0.5, 1.5, 4}}};
     int k = 0;
     for (const Case& c : cases) {
         const std::string scene = work("slab" + std::to_string(k) + ".xml"), out = work("slab" + std::to_string(k) + ".exr");
         ++k;
         // camera at z = 5 looking down -z through the slab (|z| <= 0.25), 2° field of view
         write_file(scene, "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(5.0f, 2.0f, 16, 16, 256) +
-                              slab_object(c.sigma) + "<emitter type=\"constant\"/></scene>");
+                              slab_object(c.sigma, c.scale) + "<emitter type=\"constant\"/></scene>");
         CHECK(run({scene, "-o", out, "--quiet"}) == 0);
         Image img = read_exr(out);
         Stats st = stats(img, 0.0);
@@ -85,7 +86,7 @@ TEST_CASE(homogeneous_slab) {
 TEST_CASE(shadow_ray_transmittance) {
     // Analytic transmittance through null boundaries, nested media, and a blocking dielectric.
     std::string xml = std::string("<scene version=\"3.0.0\"><integrator type=\"volpath\"/>") + camera(5, 30, 8, 8, 1) +
-                      slab_object("1, 2, 3") +
+                      slab_object("0.25, 0.5, 0.75", "4") +
                       R"(<shape type="sphere"><point name="center" x="0" y="0" z="-3"/><float name="radius" value="0.5"/>
                            <bsdf type="null"/><medium type="homogeneous" name="interior"><rgb name="sigma_t" value="0.4"/></medium>
                            <medium type="homogeneous" name="exterior"><rgb name="sigma_t" value="0"/></medium></shape>
@@ -118,7 +119,7 @@ TEST_CASE(determinism_and_outputs) {
         <shape type="sphere"><point name="center" x="-0.8" y="0" z="0"/><float name="radius" value="0.6"/>
           <bsdf type="roughconductor"><string name="material" value="Cu"/><float name="alpha" value="0.2"/></bsdf></shape>
         <shape type="sphere"><point name="center" x="0.8" y="0" z="0"/><float name="radius" value="0.6"/>
-          <bsdf type="dielectric"/><medium type="homogeneous" name="interior"><rgb name="sigma_t" value="1, 2, 3"/>
+          <bsdf type="dielectric"/><medium type="homogeneous" name="interior"><rgb name="sigma_t" value="0.25, 0.5, 0.75"/><float name="scale" value="4"/>
           <phase type="hg"><float name="g" value="$g"/></phase></medium></shape>
         <shape type="disk"><transform name="to_world"><rotate x="1" angle="90"/><translate y="2"/></transform>
           <emitter type="area"><rgb name="radiance" value="4"/></emitter></shape>

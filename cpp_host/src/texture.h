@@ -1,0 +1,44 @@
+// mfhost — textures, as Mitsuba 3 takes them wherever a plugin parameter is a texture:
+// a constant (<rgb>, <float>, <spectrum>), `checkerboard` (color0, color1, to_uv) and `bitmap`
+// (filename: PNG, JPEG or OpenEXR; filter_type bilinear|nearest, wrap_mode repeat|mirror|clamp,
+// raw, to_uv). Lookups use the surface's Mitsuba uv (SurfaceHit::uv).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "math.h"
+
+namespace mf {
+
+class Texture {
+public:
+    virtual ~Texture() = default;
+    virtual Rgb eval(const Vec2& uv) const = 0;
+    /// Largest value of any channel (bounds checks, e.g. reflectance <= 1).
+    virtual float max_value() const = 0;
+    /// Non-null for a constant texture.
+    virtual const Rgb* constant() const { return nullptr; }
+};
+
+/// Mitsuba's to_uv: a 2D affine map given as a 4x4 <transform> (its x/y rows and columns).
+struct UvTransform {
+    float a = 1, b = 0, c = 0, d = 0, e = 1, f = 0;  // u' = a u + b v + c, v' = d u + e v + f
+    static UvTransform from(const Mat4& m) {
+        return {float(m.m[0][0]), float(m.m[0][1]), float(m.m[0][3]), float(m.m[1][0]), float(m.m[1][1]), float(m.m[1][3])};
+    }
+    Vec2 apply(const Vec2& uv) const { return Vec2(a * uv.x + b * uv.y + c, d * uv.x + e * uv.y + f); }
+};
+
+std::shared_ptr<Texture> make_constant_texture(const Rgb& value);
+/// Mitsuba's checkerboard: color0 where frac(u) and frac(v) are on the same side of 1/2.
+std::shared_ptr<Texture> make_checkerboard_texture(std::shared_ptr<Texture> color0, std::shared_ptr<Texture> color1,
+                                                   const UvTransform& to_uv);
+enum class BitmapFilter { Bilinear, Nearest };
+enum class WrapMode { Repeat, Mirror, Clamp };
+/// `rgb`: linear values, row 0 = v 0 (the image's top row, as Mitsuba stores it).
+std::shared_ptr<Texture> make_bitmap_texture(std::vector<float> rgb, int width, int height, BitmapFilter filter,
+                                             WrapMode wrap, const UvTransform& to_uv);
+
+}  // namespace mf

@@ -36,6 +36,12 @@ fn uniform_direction(rng: &mut Pcg32) -> DVec3 {
 }
 
 fn main() {
+    // `bench_core tracking [label filter]`: the tracking figures only (e.g. for a profiler).
+    let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("tracking") {
+        tracking_benchmarks(args.get(2).map(String::as_str).unwrap_or(""));
+        return;
+    }
     let mut rng = Pcg32::new(1, 1);
     let dirs: Vec<DVec3> = (0..N).map(|_| uniform_direction(&mut rng)).collect();
     let us: Vec<[f64; PHASE_SAMPLE_DIMENSIONS]> = (0..N).map(|_| std::array::from_fn(|_| rng.next_f64())).collect();
@@ -70,7 +76,7 @@ fn main() {
 
     bench_closest();
     println!("\n== tracking (library tracker, per call)");
-    tracking_benchmarks();
+    tracking_benchmarks("");
 }
 
 /// Mesh generators shared with the integration tests.
@@ -134,7 +140,7 @@ fn bench_tracking<S: MeanSurface>(label: &str, medium: &macrofacet::MacrofacetMe
     );
 }
 
-fn tracking_benchmarks() {
+fn tracking_benchmarks(filter: &str) {
     const RAYS: usize = 20_000;
     let mut rng = Pcg32::new(3, 3);
     let mut medium = |sigma: f64, params: &[(&str, &str)]| {
@@ -154,7 +160,9 @@ fn tracking_benchmarks() {
         let n = uniform_direction(&mut rng);
         (n, n)
     }).collect();
-    bench_tracking("sphere, sigma 1e-3 (thin)", &medium(1e-3, &[("distribution", "beckmann"), ("alpha", "0.3")]), &sphere, &points, 0.0);
+    if "sphere, sigma 1e-3 (thin)".contains(filter) {
+        bench_tracking("sphere, sigma 1e-3 (thin)", &medium(1e-3, &[("distribution", "beckmann"), ("alpha", "0.3")]), &sphere, &points, 0.0);
+    }
     // The default scene's torus (64 x 24, R 0.5, r 0.2) at its three sigmas; rays start up to one
     // enclosure cell (1/128 of the extent, times sqrt 3) above the shell, as in mfrender.
     let t = meshes::torus(0.5, 0.2, 64, 24);
@@ -174,7 +182,9 @@ fn tracking_benchmarks() {
         ("torus, sigma 0.02 (in-between)", 0.02, vec![("alpha_u", "0.4"), ("alpha_v", "0.4"), ("alpha_z", "0.2")]),
         ("torus, sigma 0.05 (volume-like)", 0.05, vec![("alpha", "1")]),
     ] {
-        bench_tracking(label, &medium(sigma, &params), &torus, &points, gap);
+        if label.contains(filter) {
+            bench_tracking(label, &medium(sigma, &params), &torus, &points, gap);
+        }
     }
 }
 

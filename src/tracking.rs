@@ -75,7 +75,7 @@ const MAX_SEGMENTS: u32 = 1 << 16;
 const LOOSENESS_SIGMAS: f64 = 1.0;
 const MAX_SHORTENINGS: u32 = 4;
 /// Lipschitz steps above the shell per segment (each one surface query).
-const MAX_SKIPS: u32 = 16;
+const MAX_SKIPS: u32 = 64;
 /// Default reach of a segment, in σ of change of `f` (covers the shell from its top to deep
 /// below the mean surface, where a collision is nearly certain).
 const SEGMENT_SIGMAS: f64 = 4.0;
@@ -235,16 +235,32 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
     /// Far above the shell, steps of `f − top` (the signed distance is 1-Lipschitz, so the shell
     /// cannot begin before): cheaper than bounding a long segment with many candidate features.
     /// Returns the new position and its surface point.
+    /// Between exact queries the surface's cheap lower bound of `|f|` keeps the steps going: the
+    /// ray stays above the top face (`f >= top > 0` after a step of `f − top`), so there `f` is at
+    /// least that bound.
     fn skip_above(&self, mut t: f64, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
         let (sigma, top) = (self.height().sigma, self.height().top());
+        let threshold = top + SKIP_SIGMAS * sigma;
+        let mut f = start.f;
+        let mut exact = true;
         for _ in 0..MAX_SKIPS {
-            if !(start.f > top + SKIP_SIGMAS * sigma) || !(t < t_exit) {
+            if !(f > threshold) || !(t < t_exit) {
                 break;
             }
-            t += start.f - top;
+            t += f - top;
             if !(t < t_exit) {
                 break;
             }
+            let p = origin + t * d;
+            f = self.surface.distance_bound(p).max(top);
+            exact = false;
+            if !(f > threshold) {
+                start = self.checked(self.surface.point(p), p, stats)?;
+                f = start.f;
+                exact = true;
+            }
+        }
+        if !exact {
             let p = origin + t * d;
             start = self.checked(self.surface.point(p), p, stats)?;
         }

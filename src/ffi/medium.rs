@@ -157,7 +157,7 @@ fn length(name: &str, t: f64) -> FfiResult<f64> {
     }
 }
 
-fn uniform(name: &str, u: f64) -> FfiResult<f64> {
+fn uniform(name: impl std::fmt::Display, u: f64) -> FfiResult<f64> {
     if (0.0..1.0).contains(&u) {
         Ok(u)
     } else {
@@ -419,7 +419,7 @@ fn phase_sample(m: &MacrofacetMedium, q: &mf_phase_sample_query) -> FfiResult<mf
     let fr = frame(&q.frame)?;
     let wi = local_direction(&fr, "wi", q.wi)?;
     for (i, u) in q.u.iter().enumerate() {
-        uniform(&format!("u[{i}]"), *u)?;
+        uniform(format_args!("u[{i}]"), *u)?;
     }
     Ok(match m.phase.sample(wi, q.u) {
         Some(s) => mf_phase_sample_result { wo: fr.to_world(s.wo).into(), weight: rgb(s.weight), pdf: s.pdf, valid: true },

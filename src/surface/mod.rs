@@ -171,6 +171,12 @@ pub trait MeanSurface {
     /// shorten the segment to get there, or when bounding the whole of it would be costly.
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut Self::Cache) -> Result<SegmentBound>;
 
+    /// A lower bound of `|f(p)|`, cheaper than [`Self::point`] (0 when unknown): lets the
+    /// tracker cross empty space above the shell without exact queries.
+    fn distance_bound(&self, _p: DVec3) -> f64 {
+        0.0
+    }
+
     /// A box containing every point with `f <= 0` (the mean surface and its interior). Since `f`
     /// is a signed distance, the box grown by `top` contains the medium's region `f < top`.
     /// [`Aabb::EVERYTHING`] when the interior is unbounded.

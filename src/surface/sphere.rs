@@ -52,6 +52,10 @@ impl MeanSurface for Sphere {
         Ok(convex_bound(start, &end, d, length, curvature))
     }
 
+    fn distance_bound(&self, p: DVec3) -> f64 {
+        ((p - self.center).length() - self.radius).abs()
+    }
+
     fn bounding_box(&self) -> Aabb {
         if self.flip_normals {
             Aabb::EVERYTHING

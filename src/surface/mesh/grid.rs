@@ -9,7 +9,7 @@
 //! rounding, so it also serves points a hair outside the cell).
 
 use super::bvh::Bvh;
-use super::triangle::{closest_among, Closest, Triangle};
+use super::triangle::{closer, closest_among, closest_on_triangle, Closest, Triangle};
 use glam::{DVec3, IVec3};
 
 /// Cells whose centre is farther than this many cells from the surface get no list (queries
@@ -30,6 +30,11 @@ pub(super) struct CellGrid {
     /// `lists[offsets[i]..offsets[i + 1]]` is cell `i`'s list; empty outside the band.
     offsets: Vec<u32>,
     lists: Vec<u32>,
+    /// A lower bound of the distance to the mesh over each cell (rounded down to f32).
+    lower: Vec<f32>,
+    /// For band cells, a lower bound of the distance from any point of the cell to every
+    /// triangle *not* in its list (rounded down to f32).
+    beyond: Vec<f32>,
 }
 
 impl CellGrid {
@@ -44,6 +49,13 @@ impl CellGrid {
         let half_diagonal = 0.5 * 3f64.sqrt() * h;
         let block_half_diagonal = half_diagonal * BLOCK as f64;
         let mut lists_of: Vec<Vec<u32>> = vec![Vec::new(); count];
+        let mut lower = vec![0f32; count];
+        let mut beyond = vec![0f32; count];
+        // Rounded toward zero so that the f32 stays a lower bound.
+        let bound = |x: f64| -> f32 {
+            let y = x.max(0.0) as f32;
+            if f64::from(y) > x.max(0.0) { f32::from_bits(y.to_bits().saturating_sub(1)) } else { y }
+        };
         let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
         let mut scratch = Vec::new();
         let blocks = dims / BLOCK;
@@ -54,7 +66,18 @@ impl CellGrid {
                     let block_centre = origin + (first.as_dvec3() + 0.5 * BLOCK as f64) * h;
                     let d_block = bvh.closest(triangles, block_centre).distance_sq.sqrt();
                     if d_block - block_half_diagonal > band {
-                        continue; // no cell centre of the block is within the band
+                        // No cell centre of the block is within the band; every point of a cell
+                        // is at least d_block minus its distance from the block's centre.
+                        for z in 0..BLOCK {
+                            for y in 0..BLOCK {
+                                for x in 0..BLOCK {
+                                    let c = first + IVec3::new(x, y, z);
+                                    let farthest = (origin + (c.as_dvec3() + 0.5) * h - block_centre).length() + half_diagonal;
+                                    lower[index(c)] = bound((d_block - farthest) * (1.0 - 1e-9));
+                                }
+                            }
+                        }
+                        continue;
                     }
                     for z in 0..BLOCK {
                         for y in 0..BLOCK {
@@ -62,12 +85,29 @@ impl CellGrid {
                                 let c = first + IVec3::new(x, y, z);
                                 let centre = origin + (c.as_dvec3() + 0.5) * h;
                                 let d = bvh.closest(triangles, centre).distance_sq.sqrt();
+                                lower[index(c)] = bound((d - half_diagonal) * (1.0 - 1e-9));
                                 if d > band {
                                     continue;
                                 }
                                 let reach = (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
                                 if bvh.within(triangles, centre, reach, MAX_LIST, &mut scratch) {
+                                    // Keep a triangle only if it can come within d + r (the
+                                    // farthest any cell point is from the mesh) of the cell: the
+                                    // distance between bounding boxes and the distance from its
+                                    // plane to the cell bound its distance to the cell from below.
+                                    let (lo, hi) = (origin + c.as_dvec3() * h, origin + (c.as_dvec3() + 1.0) * h);
+                                    let limit = (d + half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
+                                    scratch.retain(|&i| {
+                                        let t = &triangles[i as usize];
+                                        let (tlo, thi) = (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]));
+                                        let gap = (tlo - hi).max(lo - thi).max(DVec3::ZERO).length();
+                                        let plane = (t.n.dot(centre - t.p[0]).abs() - 0.5 * h * t.n.abs().element_sum()).max(0.0);
+                                        gap.max(plane) <= limit
+                                    });
                                     lists_of[index(c)] = std::mem::take(&mut scratch);
+                                    // Left out: farther than d + 2r from the centre, or proven
+                                    // farther than d + r from the cell.
+                                    beyond[index(c)] = bound((d + half_diagonal) * (1.0 - 1e-9));
                                 }
                             }
                         }
@@ -82,7 +122,37 @@ impl CellGrid {
             lists.extend_from_slice(l);
             offsets.push(lists.len() as u32);
         }
-        CellGrid { origin, h, dims, offsets, lists }
+        CellGrid { origin, h, dims, offsets, lists, lower, beyond }
+    }
+
+    /// The closest point to `p` and a lower bound of the distance from `p` to every other
+    /// triangle, when `p` lies in a cell of the band.
+    pub fn closest_two(&self, triangles: &[Triangle], p: DVec3) -> Option<(Closest, f64)> {
+        let c = self.cell_of(p)?;
+        let i = ((c.z * self.dims.y + c.y) * self.dims.x + c.x) as usize;
+        let list = &self.lists[self.offsets[i] as usize..self.offsets[i + 1] as usize];
+        if list.is_empty() {
+            return None;
+        }
+        let (mut best, mut second) = (Closest::NONE, f64::from(self.beyond[i]).powi(2));
+        for &t in list {
+            let candidate = closest_on_triangle(&triangles[t as usize], p, t);
+            if closer(&candidate, &best) {
+                second = second.min(best.distance_sq);
+                best = candidate;
+            } else {
+                second = second.min(candidate.distance_sq);
+            }
+        }
+        Some((best, second.sqrt()))
+    }
+
+    /// A lower bound of the distance from `p` to the mesh (0 outside the grid).
+    pub fn distance_bound(&self, p: DVec3) -> f64 {
+        match self.cell_of(p) {
+            Some(c) => f64::from(self.lower[((c.z * self.dims.y + c.y) * self.dims.x + c.x) as usize]),
+            None => 0.0,
+        }
     }
 
     fn cell_of(&self, p: DVec3) -> Option<IVec3> {

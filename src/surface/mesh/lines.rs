@@ -47,9 +47,26 @@ pub(super) fn best_lower_line(start: &Tangent, end: &Tangent, length: f64, eps: 
 }
 
 /// Keeps the elements of `v` whose flag in `keep` is set, in place.
-pub(super) fn retain_flagged<T>(v: &mut Vec<T>, keep: &[bool]) {
+pub(super) fn retain_flagged<V: Retain>(v: &mut V, keep: &[bool]) {
     let mut flags = keep.iter();
-    v.retain(|_| *flags.next().expect("one flag per element"));
+    v.retain_each(&mut || *flags.next().expect("one flag per element"));
+}
+
+/// What [`retain_flagged`] needs of a vector: `Vec` and `SmallVec` keep elements in place.
+pub(super) trait Retain {
+    fn retain_each(&mut self, keep: &mut dyn FnMut() -> bool);
+}
+
+impl<T> Retain for Vec<T> {
+    fn retain_each(&mut self, keep: &mut dyn FnMut() -> bool) {
+        self.retain(|_| keep());
+    }
+}
+
+impl<A: smallvec::Array> Retain for smallvec::SmallVec<A> {
+    fn retain_each(&mut self, keep: &mut dyn FnMut() -> bool) {
+        self.retain(|_| keep());
+    }
 }
 
 /// Whether a triangle can be the closest one somewhere on a segment of `length`: its distance
@@ -64,11 +81,6 @@ pub(super) fn may_be_closest(start: &Tangent, end: &Tangent, tent: (f64, f64), l
     let apex = 0.5 * (tent.1 + length - tent.0);
     let cross = if l0.1 != l1.1 { (l1.0 - l0.0) / (l0.1 - l1.1) } else { 0.0 };
     [0.0, length, apex, cross].into_iter().filter(|s| (0.0..=length).contains(s)).any(|s| lower(s) <= upper(s))
-}
-
-/// The elements of `v` whose flag in `keep` is set.
-pub(super) fn retained<A: smallvec::Array>(v: smallvec::SmallVec<A>, keep: &[bool]) -> smallvec::SmallVec<A> {
-    v.into_iter().zip(keep).filter(|(_, k)| **k).map(|(x, _)| x).collect()
 }
 
 /// The closest point among the candidates' tangents.

@@ -24,7 +24,7 @@ use crate::error::{Error, ErrorKind, Result};
 use bvh::Bvh;
 use glam::{DVec2, DVec3};
 use grid::CellGrid;
-use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, retained, Tangent};
+use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, Tangent};
 use smallvec::SmallVec;
 use std::collections::HashMap;
 use triangle::{closest_among, closest_on_triangle, Closest, Feature, Triangle};
@@ -312,6 +312,62 @@ impl TriangleMesh {
     }
 }
 
+impl TriangleMesh {
+    /// The common case of a thin shell, in O(1): while the closest triangle `T` at the start
+    /// stays closer than every other — for `s < (d_2 − d_T)/2`, where `d_2` bounds the others'
+    /// distance from below, both distances being 1-Lipschitz — and the segment stays over `T`'s
+    /// face (both ends project inside it; the face's region is convex), `f` is exactly the signed
+    /// distance to `T`'s plane on both sides of it, and the frame normal is `T`'s interpolated
+    /// vertex normal (affine in the segment) or its face normal. `None` elsewhere.
+    fn single_face_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> Option<SegmentBound> {
+        let (near, second) = self.grid.closest_two(&self.triangles, p)?;
+        let tri = &self.triangles[near.triangle as usize];
+        if near.feature != Feature::Face || tri.n == DVec3::ZERO {
+            return None;
+        }
+        let reach = 0.5 * (second - near.distance_sq.sqrt()) * (1.0 - 1e-9) - self.epsilon;
+        // A much shorter piece would cost more segments than the general bound costs.
+        if !(reach > 0.5 * length) {
+            return None;
+        }
+        let piece = length.min(reach);
+        let end = closest_on_triangle(tri, p + piece * d, near.triangle);
+        if end.feature != Feature::Face {
+            return None;
+        }
+        let plane = [tri.n.dot(p - tri.p[0]), tri.n.dot(p + piece * d - tri.p[0])];
+        let pad = PAD * self.epsilon;
+        let cos = match tri.shading {
+            None => [d.dot(tri.n); 2],
+            Some(ns) => {
+                // m(s) = Σ b_i(s) n_i is affine along the segment; |m| is convex, so its minimum
+                // over the segment is at the end points or at the foot of the perpendicular.
+                let m = |b: DVec3| b.x * ns[0] + b.y * ns[1] + b.z * ns[2];
+                let (m0, m1) = (m(near.barycentric), m(end.barycentric));
+                let dm = m1 - m0;
+                let foot = if dm.length_squared() > 0.0 { (-m0.dot(dm) / dm.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+                let min_len = (m0 + foot * dm).length().max(tri.shading_min_length);
+                if !(min_len > 0.0) {
+                    return None;
+                }
+                let (a, b) = (d.dot(m0).min(d.dot(m1)), d.dot(m0).max(d.dot(m1)));
+                // d·m lies in [a, b]; dividing by |m| ∈ [min_len, 1] can magnify it up to 1/min_len.
+                [if a < 0.0 { a / min_len } else { a }, if b > 0.0 { b / min_len } else { b }]
+            }
+        };
+        cache.candidates.clear();
+        cache.candidates.push(near.triangle);
+        let end_point = self.surface_point(p + piece * d, &end);
+        Some(SegmentBound {
+            length: piece,
+            f_lo: [plane[0] - pad, plane[1] - pad],
+            f_hi: [plane[0] + pad, plane[1] + pad],
+            cos: [(cos[0] - 1e-12).max(-1.0), (cos[1] + 1e-12).min(1.0)],
+            end: Some(end_point),
+        })
+    }
+}
+
 impl MeanSurface for TriangleMesh {
     type Cache = MeshCache;
 
@@ -327,6 +383,9 @@ impl MeanSurface for TriangleMesh {
     }
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> Result<SegmentBound> {
+        if let Some(bound) = self.single_face_bound(p, d, length, cache) {
+            return Ok(bound);
+        }
         // The candidates: the union of the grid's lists along the segment, less the triangles
         // that cannot be closest anywhere on it (the closest triangle to q(s) lies within
         // |f(q(s))| <= tent(s) = min(|f(p)| + s, |f(end)| + L − s) of it, f being 1-Lipschitz).
@@ -362,7 +421,9 @@ impl MeanSurface for TriangleMesh {
             keep[k] = true;
         }
         retain_flagged(&mut cache.candidates, &keep);
-        let (first, mut last) = (retained(first, &keep), retained(last, &keep));
+        let (mut first, mut last) = (first, last);
+        retain_flagged(&mut first, &keep);
+        retain_flagged(&mut last, &keep);
 
         // Lower lines of |f(p + s d)| = min_T d_T: per candidate lines below d_T, lowered by the
         // coordinates' rounding (about `epsilon`). The sign of f can only change where every
@@ -401,8 +462,10 @@ impl MeanSurface for TriangleMesh {
         // drop it (from the bounds, and from the point queries on this segment).
         let keep: Few<bool> = lines.iter().map(|(v, slope)| !(*v > chord[0] && v + slope * piece > chord[1])).collect();
         retain_flagged(&mut cache.candidates, &keep);
-        let (first, last) = (retained(first, &keep), retained(last, &keep));
-        let lines = retained(lines, &keep);
+        retain_flagged(&mut first, &keep);
+        retain_flagged(&mut last, &keep);
+        let mut lines = lines;
+        retain_flagged(&mut lines, &keep);
         let a_at = |s: f64| lines.iter().map(|(v, k)| v + k * s).fold(f64::INFINITY, f64::min);
         let (a0, a1) = (a_at(0.0).max(-eps), a_at(piece).max(-eps));
         let chord = [chord[0] - eps, chord[1] - eps];
@@ -448,6 +511,10 @@ impl MeanSurface for TriangleMesh {
         let pad = |v: [f64; 2], by: f64| [v[0] + by, v[1] + by];
         let end = self.surface_point(p + piece * d, &closest_of(&last));
         Ok(SegmentBound { length: piece, f_lo: pad(f_lo, -PAD * eps), f_hi: pad(f_hi, PAD * eps), cos, end: Some(end) })
+    }
+
+    fn distance_bound(&self, p: DVec3) -> f64 {
+        self.grid.distance_bound(p)
     }
 
     fn bounding_box(&self) -> Aabb {

@@ -143,7 +143,7 @@ fn bench_tracking<S: MeanSurface>(label: &str, medium: &macrofacet::MacrofacetMe
 fn tracking_benchmarks(filter: &str) {
     const RAYS: usize = 20_000;
     let mut rng = Pcg32::new(3, 3);
-    let mut medium = |sigma: f64, params: &[(&str, &str)]| {
+    let medium = |sigma: f64, params: &[(&str, &str)]| {
         let mut p = ParamSet::new();
         p.set_float("sigma", sigma).set_string("material", "Au");
         for (name, value) in params {
@@ -166,7 +166,18 @@ fn tracking_benchmarks(filter: &str) {
     // The default scene's torus (64 x 24, R 0.5, r 0.2) at its three sigmas; rays start up to one
     // enclosure cell (1/128 of the extent, times sqrt 3) above the shell, as in mfrender.
     let t = meshes::torus(0.5, 0.2, 64, 24);
+    let start = Instant::now();
     let torus = TriangleMesh::new(&t.positions, &t.indices, t.normals.as_deref(), None).unwrap();
+    let built = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let boundary = macrofacet::surface::enclosure(&torus, 0.006, 0.0).unwrap();
+    println!(
+        "torus mesh ({} triangles): surface built in {:.1} ms, its shell's enclosure ({} triangles) in {:.1} ms",
+        t.indices.len(),
+        built * 1e3,
+        boundary.triangles.len(),
+        start.elapsed().as_secs_f64() * 1e3
+    );
     let points: Vec<(DVec3, DVec3)> = (0..RAYS)
         .map(|_| {
             let (phi, theta) = (2.0 * std::f64::consts::PI * rng.next_f64(), 2.0 * std::f64::consts::PI * rng.next_f64());

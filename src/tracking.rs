@@ -238,7 +238,8 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
     /// Between exact queries the surface's cheap lower bound of `|f|` keeps the steps going: the
     /// ray stays above the top face (`f >= top > 0` after a step of `f − top`), so there `f` is at
     /// least that bound.
-    fn skip_above(&self, mut t: f64, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
+    #[allow(clippy::too_many_arguments)]
+    fn skip_above(&self, mut t: f64, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
         let (sigma, top) = (self.height().sigma, self.height().top());
         let threshold = top + SKIP_SIGMAS * sigma;
         let mut f = start.f;
@@ -247,7 +248,8 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
             if !(f > threshold) || !(t < t_exit) {
                 break;
             }
-            t += f - top;
+            // An exact query knows more than the Lipschitz bound when the surface does.
+            t += if exact { self.surface.clearance(&start, origin + t * d, d, top, cache) } else { f - top };
             if !(t < t_exit) {
                 break;
             }
@@ -255,14 +257,14 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
             f = self.surface.distance_bound(p).max(top);
             exact = false;
             if !(f > threshold) {
-                start = self.checked(self.surface.point(p), p, stats)?;
+                start = self.checked(self.surface.start_point(p, cache), p, stats)?;
                 f = start.f;
                 exact = true;
             }
         }
         if !exact {
             let p = origin + t * d;
-            start = self.checked(self.surface.point(p), p, stats)?;
+            start = self.checked(self.surface.start_point(p, cache), p, stats)?;
         }
         Ok((t, start))
     }
@@ -333,12 +335,12 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
     }
 
     /// The start of the segment after `seg`: the bound's end point or a fresh query.
-    fn advance(&self, seg: &Segment, origin: DVec3, d: DVec3, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
+    fn advance(&self, seg: &Segment, origin: DVec3, d: DVec3, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
         let t = seg.t + seg.bound.length;
         let p = origin + t * d;
         let start = match seg.bound.end {
             Some(end) => self.checked(Ok(end), p, stats)?,
-            None => self.checked(self.surface.point(p), p, stats)?,
+            None => self.checked(self.surface.start_point(p, cache), p, stats)?,
         };
         Ok((t, start))
     }
@@ -349,10 +351,10 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
         let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(TrackedFlight::Pass) };
         let mut cache = S::Cache::default();
         let mut t = t_enter;
-        let mut start = self.checked(self.surface.point(origin + t * d), origin + t * d, stats)?;
+        let mut start = self.checked(self.surface.start_point(origin + t * d, &mut cache), origin + t * d, stats)?;
         let mut previous = Previous::None;
         for _ in 0..MAX_SEGMENTS {
-            (t, start) = self.skip_above(t, start, origin, d, t_exit, stats)?;
+            (t, start) = self.skip_above(t, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
                 return Ok(TrackedFlight::Pass);
             }
@@ -381,7 +383,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
             } else {
                 Previous::None
             };
-            (t, start) = self.advance(&seg, origin, d, stats)?;
+            (t, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
         }
         Err(Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)")))
     }
@@ -392,11 +394,11 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
         let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(1.0) };
         let mut cache = S::Cache::default();
         let mut t = t_enter;
-        let mut start = self.checked(self.surface.point(origin + t * d), origin + t * d, stats)?;
+        let mut start = self.checked(self.surface.start_point(origin + t * d, &mut cache), origin + t * d, stats)?;
         let mut transmittance = 1.0;
         let mut previous = Previous::None;
         for _ in 0..MAX_SEGMENTS {
-            (t, start) = self.skip_above(t, start, origin, d, t_exit, stats)?;
+            (t, start) = self.skip_above(t, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
                 return Ok(transmittance);
             }
@@ -440,7 +442,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
             } else {
                 Previous::None
             };
-            (t, start) = self.advance(&seg, origin, d, stats)?;
+            (t, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
         }
         Err(Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)")))
     }

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "image_io.h"
+#include "medium_macrofacet.h"
 #include "render.h"
 #include "scene_builder.h"
 #include "shard.h"
@@ -297,6 +298,17 @@ int mfrender_main(int argc, char** argv) {
                          scene->camera.height, scene->spp,
                          sharded ? (" (shard " + std::to_string(shard_index) + "/" + std::to_string(shard_count) + ")").c_str() : "",
                          stats.seconds, stats.seconds > 0 ? double(stats.samples) / stats.seconds * 1e-6 : 0.0, written.c_str());
+        if (!quiet) {
+            for (const auto& medium : scene->media) {
+                const auto* m = dynamic_cast<const MacrofacetMedium*>(medium.get());
+                if (!m) continue;
+                TrackCounts c = m->counts();
+                if (c.calls == 0) continue;
+                double n = double(c.calls);
+                std::fprintf(stderr, "mfrender: %s: %llu tracking calls; per call %.2f surface queries, %.2f segments, %.2f tentative collisions\n",
+                             m->label().c_str(), (unsigned long long)c.calls, c.surface_queries / n, c.segments / n, c.tentative_collisions / n);
+            }
+        }
     });
 }
 

@@ -51,6 +51,7 @@ public:
     /// Tentative collisions whose real sigma_t exceeded the library's majorant (must stay 0).
     uint64_t majorant_violations() const { return violations_.load(std::memory_order_relaxed); }
     TrackCounts counts() const;
+    const std::string& label() const { return label_; }
 
 private:
     void count(const ::mf_track_stats& s) const;

@@ -6,15 +6,15 @@
 //! bound decides from one query at its centre (`f(x) >= f(c) − |x − c|`), and the enclosure is
 //! the boundary between kept and dropped cells. It is therefore conservative by construction (no
 //! point of the region lies outside it), watertight and free of self-intersections; it lies
-//! within one cell diagonal of the level set. A coarse pass skips whole blocks far from the level
-//! set.
+//! within one cell diagonal of the level set. Blocks of cells are halved only where the same
+//! bound at their centre leaves them undecided, so the queries follow the level set.
 
 use super::MeanSurface;
 use crate::error::{Error, ErrorKind, Result};
 use glam::{DVec3, IVec3};
 use std::collections::HashMap;
 
-/// Fine cells per coarse block edge.
+/// Fine cells per coarse block edge (a power of two: blocks halve down to cells).
 const BLOCK: i32 = 8;
 /// The largest grid, in fine cells along the longest axis (the cell grows beyond it).
 const MAX_CELLS: f64 = 512.0;
@@ -57,29 +57,46 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     let level = level + 1e-3 * h;
     let blocks = ((hi - lo) / (h * BLOCK as f64)).ceil().as_ivec3().max(IVec3::ONE);
     let cells = blocks * BLOCK;
-    let centre = |c: IVec3| lo + (c.as_dvec3() + 0.5) * h;
 
-    // Kept cells, by a coarse pass over blocks and a fine pass where the block is undecided.
+    // Kept cells, by a descent through blocks halving down to cells: one query at a block's
+    // centre decides it whole when `f` there is at least half its diagonal from the level.
     let mut kept = vec![false; (cells.x * cells.y * cells.z) as usize];
     let index = |c: IVec3| ((c.z * cells.y + c.y) * cells.x + c.x) as usize;
-    let block_half_diagonal = half_diagonal * BLOCK as f64;
+    let mut stack: Vec<(IVec3, i32)> = Vec::new();
     for bz in 0..blocks.z {
         for by in 0..blocks.y {
             for bx in 0..blocks.x {
-                let first = IVec3::new(bx, by, bz) * BLOCK;
-                let block_centre = lo + (first.as_dvec3() + 0.5 * BLOCK as f64) * h;
-                let f = surface.point(block_centre)?.f;
-                if f - block_half_diagonal >= level + half_diagonal {
-                    continue; // every cell centre has f >= level + half a cell diagonal: none kept
-                }
-                let inside = f + block_half_diagonal < level - half_diagonal;
-                for z in 0..BLOCK {
-                    for y in 0..BLOCK {
-                        for x in 0..BLOCK {
-                            let c = first + IVec3::new(x, y, z);
-                            kept[index(c)] = inside || surface.point(centre(c))?.f - half_diagonal < level;
-                        }
+                stack.push((IVec3::new(bx, by, bz) * BLOCK, BLOCK));
+            }
+        }
+    }
+    while let Some((first, size)) = stack.pop() {
+        let block_centre = lo + (first.as_dvec3() + 0.5 * size as f64) * h;
+        let f = surface.point(block_centre)?.f;
+        if size == 1 {
+            kept[index(first)] = f - half_diagonal < level;
+            continue;
+        }
+        let block_half_diagonal = half_diagonal * size as f64;
+        // Every cell centre has f >= level + half a cell diagonal: none kept.
+        if f - block_half_diagonal >= level + half_diagonal {
+            continue;
+        }
+        if f + block_half_diagonal < level - half_diagonal {
+            for z in 0..size {
+                for y in 0..size {
+                    for x in 0..size {
+                        kept[index(first + IVec3::new(x, y, z))] = true;
                     }
+                }
+            }
+            continue;
+        }
+        let half = size / 2;
+        for z in 0..2 {
+            for y in 0..2 {
+                for x in 0..2 {
+                    stack.push((first + IVec3::new(x, y, z) * half, half));
                 }
             }
         }

@@ -160,6 +160,12 @@ pub trait MeanSurface {
     /// The surface at `p`.
     fn point(&self, p: DVec3) -> Result<SurfacePoint>;
 
+    /// The surface at `p` where the tracker starts a segment: as [`Self::point`], and may note
+    /// in `cache` what helps the [`Self::bound`] at `p` that follows.
+    fn start_point(&self, p: DVec3, _cache: &mut Self::Cache) -> Result<SurfacePoint> {
+        self.point(p)
+    }
+
     /// The surface at a point of the segment of the last [`Self::bound`] call with this `cache`;
     /// may use the cache to answer faster, must answer exactly as [`Self::point`].
     fn point_on_segment(&self, p: DVec3, _cache: &Self::Cache) -> Result<SurfacePoint> {
@@ -170,6 +176,13 @@ pub trait MeanSurface {
     /// tracker prefers bounds whose width `f_hi − f_lo` stays within `tolerance`; a surface may
     /// shorten the segment to get there, or when bounding the whole of it would be costly.
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut Self::Cache) -> Result<SegmentBound>;
+
+    /// How far along `d` from `p` (where `start = point(p)` and `start.f > level`) `f` stays
+    /// above `level`. Every signed distance allows `start.f − level`; a surface that knows `f`
+    /// along the ray may say more (up to `+∞`: never below `level`).
+    fn clearance(&self, start: &SurfacePoint, _p: DVec3, _d: DVec3, level: f64, _cache: &mut Self::Cache) -> f64 {
+        start.f - level
+    }
 
     /// A lower bound of `|f(p)|`, cheaper than [`Self::point`] (0 when unknown): lets the
     /// tracker cross empty space above the shell without exact queries.

@@ -52,6 +52,29 @@ impl MeanSurface for Sphere {
         Ok(convex_bound(start, &end, d, length, curvature))
     }
 
+    /// The distance to the level sphere `|p − c| = r ± level`, shortened by the rounding of
+    /// the root.
+    fn clearance(&self, start: &SurfacePoint, p: DVec3, d: DVec3, level: f64, _: &mut ()) -> f64 {
+        let lipschitz = start.f - level;
+        let v = p - self.center;
+        let radius = self.radius + self.sign() * level;
+        if !(radius > 0.0) {
+            return lipschitz;
+        }
+        let b = v.dot(d);
+        let discriminant = b * b - (v.length_squared() - radius * radius);
+        let exact = if self.flip_normals {
+            // Inside the level sphere: the exit.
+            -b + discriminant.max(0.0).sqrt()
+        } else if discriminant < 0.0 || b >= 0.0 {
+            f64::INFINITY // the ray misses the level sphere or moves away from it
+        } else {
+            // The nearer root, written without cancellation.
+            (v.length_squared() - radius * radius) / (-b + discriminant.sqrt())
+        };
+        (exact * (1.0 - 1e-9)).max(lipschitz)
+    }
+
     fn distance_bound(&self, p: DVec3) -> f64 {
         ((p - self.center).length() - self.radius).abs()
     }

@@ -118,3 +118,20 @@ pub fn cube() -> Mesh {
 pub fn l_prism() -> Mesh {
     prism(&[(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.0, 1.0), (1.0, 2.0), (0.0, 2.0)], 1.0)
 }
+
+/// A lumpy, irregular closed surface: a torus whose vertices are moved along their normals by
+/// up to `bumps` of the tube radius (deterministic pseudo-random), without vertex normals, so
+/// that every edge has its own dihedral angle, convex and concave.
+pub fn lumpy_torus(big: f64, small: f64, u: usize, v: usize, bumps: f64) -> Mesh {
+    let mut m = torus(big, small, u, v);
+    let normals = m.normals.take().expect("torus normals");
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    for (p, n) in m.positions.iter_mut().zip(&normals) {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let jitter = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        *p += 2.0 * bumps * small * jitter * *n;
+    }
+    m
+}

@@ -9,14 +9,15 @@
 //! rounding, so it also serves points a hair outside the cell).
 
 use super::bvh::Bvh;
-use super::triangle::{closer, closest_among, closest_on_triangle, Closest, Triangle};
+use super::triangle::{closest_on_triangle, Triangle};
 use glam::{DVec3, IVec3};
 
 /// Cells whose centre is farther than this many cells from the surface get no list (queries
 /// there use the hierarchy).
 const BAND_CELLS: f64 = 1.5;
-/// Fine cells per edge of the blocks that the build skips wholesale.
-const BLOCK: i32 = 4;
+/// Fine cells per edge of the coarsest blocks of the build (a power of two: they halve down to
+/// cells where they meet the band).
+const BLOCK: i32 = 8;
 /// The most cells; beyond, the cells grow.
 const MAX_CELLS: f64 = 2.0e6;
 /// Longer lists are dropped (queries there use the hierarchy).
@@ -32,9 +33,6 @@ pub(super) struct CellGrid {
     lists: Vec<u32>,
     /// A lower bound of the distance to the mesh over each cell (rounded down to f32).
     lower: Vec<f32>,
-    /// For band cells, a lower bound of the distance from any point of the cell to every
-    /// triangle *not* in its list (rounded down to f32).
-    beyond: Vec<f32>,
 }
 
 impl CellGrid {
@@ -47,10 +45,8 @@ impl CellGrid {
         let dims = (((max - min) + 2.0 * (band + h)) / (h * BLOCK as f64)).ceil().as_ivec3().max(IVec3::ONE) * BLOCK;
         let count = (dims.x as usize) * (dims.y as usize) * (dims.z as usize);
         let half_diagonal = 0.5 * 3f64.sqrt() * h;
-        let block_half_diagonal = half_diagonal * BLOCK as f64;
         let mut lists_of: Vec<Vec<u32>> = vec![Vec::new(); count];
         let mut lower = vec![0f32; count];
-        let mut beyond = vec![0f32; count];
         // Rounded toward zero so that the f32 stays a lower bound.
         let bound = |x: f64| -> f32 {
             let y = x.max(0.0) as f32;
@@ -58,61 +54,67 @@ impl CellGrid {
         };
         let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
         let mut scratch = Vec::new();
+        // A descent through blocks halving down to cells: a block whose centre is farther than
+        // the band plus its half diagonal holds no band cell, and bounds its cells' distances.
         let blocks = dims / BLOCK;
+        let mut stack: Vec<(IVec3, i32)> = Vec::new();
         for bz in 0..blocks.z {
             for by in 0..blocks.y {
                 for bx in 0..blocks.x {
-                    let first = IVec3::new(bx, by, bz) * BLOCK;
-                    let block_centre = origin + (first.as_dvec3() + 0.5 * BLOCK as f64) * h;
-                    let d_block = bvh.closest(triangles, block_centre).distance_sq.sqrt();
-                    if d_block - block_half_diagonal > band {
-                        // No cell centre of the block is within the band; every point of a cell
-                        // is at least d_block minus its distance from the block's centre.
-                        for z in 0..BLOCK {
-                            for y in 0..BLOCK {
-                                for x in 0..BLOCK {
-                                    let c = first + IVec3::new(x, y, z);
-                                    let farthest = (origin + (c.as_dvec3() + 0.5) * h - block_centre).length() + half_diagonal;
-                                    lower[index(c)] = bound((d_block - farthest) * (1.0 - 1e-9));
-                                }
-                            }
-                        }
-                        continue;
-                    }
-                    for z in 0..BLOCK {
-                        for y in 0..BLOCK {
-                            for x in 0..BLOCK {
-                                let c = first + IVec3::new(x, y, z);
-                                let centre = origin + (c.as_dvec3() + 0.5) * h;
-                                let d = bvh.closest(triangles, centre).distance_sq.sqrt();
-                                lower[index(c)] = bound((d - half_diagonal) * (1.0 - 1e-9));
-                                if d > band {
-                                    continue;
-                                }
-                                let reach = (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
-                                if bvh.within(triangles, centre, reach, MAX_LIST, &mut scratch) {
-                                    // Keep a triangle only if it can come within d + r (the
-                                    // farthest any cell point is from the mesh) of the cell: the
-                                    // distance between bounding boxes and the distance from its
-                                    // plane to the cell bound its distance to the cell from below.
-                                    let (lo, hi) = (origin + c.as_dvec3() * h, origin + (c.as_dvec3() + 1.0) * h);
-                                    let limit = (d + half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
-                                    scratch.retain(|&i| {
-                                        let t = &triangles[i as usize];
-                                        let (tlo, thi) = (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]));
-                                        let gap = (tlo - hi).max(lo - thi).max(DVec3::ZERO).length();
-                                        let plane = (t.n.dot(centre - t.p[0]).abs() - 0.5 * h * t.n.abs().element_sum()).max(0.0);
-                                        gap.max(plane) <= limit
-                                    });
-                                    lists_of[index(c)] = std::mem::take(&mut scratch);
-                                    // Left out: farther than d + 2r from the centre, or proven
-                                    // farther than d + r from the cell.
-                                    beyond[index(c)] = bound((d + half_diagonal) * (1.0 - 1e-9));
-                                }
-                            }
+                    stack.push((IVec3::new(bx, by, bz) * BLOCK, BLOCK));
+                }
+            }
+        }
+        while let Some((first, size)) = stack.pop() {
+            let block_centre = origin + (first.as_dvec3() + 0.5 * size as f64) * h;
+            let d_block = bvh.closest(triangles, block_centre).distance_sq.sqrt();
+            let block_half_diagonal = half_diagonal * size as f64;
+            if size > 1 && d_block - block_half_diagonal > band {
+                // Every point of a cell is at least d_block minus its distance from the centre.
+                for z in 0..size {
+                    for y in 0..size {
+                        for x in 0..size {
+                            let c = first + IVec3::new(x, y, z);
+                            let farthest = (origin + (c.as_dvec3() + 0.5) * h - block_centre).length() + half_diagonal;
+                            lower[index(c)] = bound((d_block - farthest) * (1.0 - 1e-9));
                         }
                     }
                 }
+                continue;
+            }
+            if size > 1 {
+                let half = size / 2;
+                for z in 0..2 {
+                    for y in 0..2 {
+                        for x in 0..2 {
+                            stack.push((first + IVec3::new(x, y, z) * half, half));
+                        }
+                    }
+                }
+                continue;
+            }
+            let (c, centre, d) = (first, block_centre, d_block);
+            lower[index(c)] = bound((d - half_diagonal) * (1.0 - 1e-9));
+            if d > band {
+                continue;
+            }
+            let reach = (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
+            if bvh.within(triangles, centre, reach, MAX_LIST, &mut scratch) {
+                // Keep a triangle only if it can come within d + r (the farthest any cell point
+                // is from the mesh) of the cell: the distance between bounding boxes and the
+                // distance from its plane to the cell bound its distance to the cell from below.
+                let (lo, hi) = (origin + c.as_dvec3() * h, origin + (c.as_dvec3() + 1.0) * h);
+                let limit = (d + half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
+                scratch.retain(|&i| {
+                    let t = &triangles[i as usize];
+                    let (tlo, thi) = (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]));
+                    let gap = (tlo - hi).max(lo - thi).max(DVec3::ZERO).length();
+                    let plane = (t.n.dot(centre - t.p[0]).abs() - 0.5 * h * t.n.abs().element_sum()).max(0.0);
+                    gap.max(plane) <= limit
+                });
+                // Nearest to the centre first: queries start from it.
+                scratch.sort_by_cached_key(|&i| closest_on_triangle(&triangles[i as usize], centre, i).distance_sq.to_bits());
+                lists_of[index(c)] = std::mem::take(&mut scratch);
             }
         }
         let mut offsets = Vec::with_capacity(count + 1);
@@ -122,29 +124,7 @@ impl CellGrid {
             lists.extend_from_slice(l);
             offsets.push(lists.len() as u32);
         }
-        CellGrid { origin, h, dims, offsets, lists, lower, beyond }
-    }
-
-    /// The closest point to `p` and a lower bound of the distance from `p` to every other
-    /// triangle, when `p` lies in a cell of the band.
-    pub fn closest_two(&self, triangles: &[Triangle], p: DVec3) -> Option<(Closest, f64)> {
-        let c = self.cell_of(p)?;
-        let i = ((c.z * self.dims.y + c.y) * self.dims.x + c.x) as usize;
-        let list = &self.lists[self.offsets[i] as usize..self.offsets[i + 1] as usize];
-        if list.is_empty() {
-            return None;
-        }
-        let (mut best, mut second) = (Closest::NONE, f64::from(self.beyond[i]).powi(2));
-        for &t in list {
-            let candidate = closest_on_triangle(&triangles[t as usize], p, t);
-            if closer(&candidate, &best) {
-                second = second.min(best.distance_sq);
-                best = candidate;
-            } else {
-                second = second.min(candidate.distance_sq);
-            }
-        }
-        Some((best, second.sqrt()))
+        CellGrid { origin, h, dims, offsets, lists, lower }
     }
 
     /// A lower bound of the distance from `p` to the mesh (0 outside the grid).
@@ -166,9 +146,10 @@ impl CellGrid {
     }
 
     /// The closest point to `p` when `p` lies in a cell of the band.
-    pub fn closest(&self, triangles: &[Triangle], p: DVec3) -> Option<Closest> {
+    /// The list of the cell of `p`, nearest to its centre first; `None` outside the band.
+    pub fn list_at(&self, p: DVec3) -> Option<&[u32]> {
         let list = self.list(self.cell_of(p)?);
-        (!list.is_empty()).then(|| closest_among(triangles, p, list))
+        (!list.is_empty()).then_some(list)
     }
 
     /// The union of the lists of every cell the segment `p + s d`, `s ∈ [0, length]`, crosses

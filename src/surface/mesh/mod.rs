@@ -17,6 +17,7 @@
 mod bvh;
 mod grid;
 mod lines;
+mod region;
 mod triangle;
 
 use super::{Aabb, MeanSurface, SegmentBound, SurfacePoint};
@@ -24,6 +25,7 @@ use crate::error::{Error, ErrorKind, Result};
 use bvh::Bvh;
 use glam::{DVec2, DVec3};
 use grid::CellGrid;
+use region::FaceRegion;
 use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, Tangent};
 use smallvec::SmallVec;
 use std::collections::HashMap;
@@ -38,8 +40,13 @@ const MAX_CANDIDATES: usize = 16;
 /// The bounds are padded by this many `epsilon` (rounding, and an undetermined sign right at
 /// the start of a segment).
 const PAD: f64 = 8.0;
+/// A certified piece shorter than this fraction of the segment asked for is worth a query for
+/// the closest triangle, whose region may reach farther.
+const SHORT_PIECE: f64 = 0.25;
+/// Certified pieces shorter than this fraction of the segment are left to the general bound.
+const MIN_PIECE: f64 = 1e-3;
 /// The grid's cells, in mean edge lengths.
-const CELL_EDGES: f64 = 0.25;
+const CELL_EDGES: f64 = 0.5;
 
 /// A closed triangle mesh in world space; see the module documentation.
 #[derive(Clone, Debug)]
@@ -48,6 +55,8 @@ pub struct TriangleMesh {
     triangles: Vec<Triangle>,
     bvh: Bvh,
     grid: CellGrid,
+    /// Per triangle, where it is certainly the closest.
+    regions: Vec<FaceRegion>,
     bounds: Aabb,
     /// Distances below this are rounding noise of the coordinates (1e-13 of the mesh's extent
     /// and offset, a hundred times their rounding): there the direction `p − c` is
@@ -59,6 +68,8 @@ pub struct TriangleMesh {
 #[derive(Clone, Debug, Default)]
 pub struct MeshCache {
     candidates: Vec<u32>,
+    /// A point of the ray and the triangle closest to it (the start of the next segment).
+    hint: Option<(DVec3, u32)>,
 }
 
 impl TriangleMesh {
@@ -198,7 +209,8 @@ impl TriangleMesh {
         let grid = CellGrid::build(&bvh, &triangles, min, max, CELL_EDGES * mean_edge);
         let bounds = Aabb { min, max };
         let epsilon = 1e-13 * (bounds.max - bounds.min).max_element().max(bounds.max.abs().max(bounds.min.abs()).max_element()).max(1e-300);
-        Ok(TriangleMesh { triangles, bvh, grid, bounds, epsilon })
+        let regions = FaceRegion::build(&bvh, &triangles, epsilon);
+        Ok(TriangleMesh { triangles, bvh, grid, regions, bounds, epsilon })
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -207,8 +219,14 @@ impl TriangleMesh {
 
     /// The closest point of the whole mesh to `p`: from the grid's list near the surface, else
     /// by the hierarchy.
+    /// Most queries of a thin shell are settled by the certified region ([`region`]) of one
+    /// triangle of the cell's list, a test much cheaper than a closest point.
     fn closest(&self, p: DVec3) -> Closest {
-        self.grid.closest(&self.triangles, p).unwrap_or_else(|| self.bvh.closest(&self.triangles, p))
+        let Some(list) = self.grid.list_at(p) else { return self.bvh.closest(&self.triangles, p) };
+        if let Some(&i) = list.iter().find(|&&i| self.regions[i as usize].contains(self.triangles[i as usize].n, p)) {
+            return closest_on_triangle(&self.triangles[i as usize], p, i);
+        }
+        closest_among(&self.triangles, p, list, Closest::NONE)
     }
 
     /// The surface point of a closest-point result.
@@ -313,37 +331,40 @@ impl TriangleMesh {
 }
 
 impl TriangleMesh {
-    /// The common case of a thin shell, in O(1): while the closest triangle `T` at the start
-    /// stays closer than every other — for `s < (d_2 − d_T)/2`, where `d_2` bounds the others'
-    /// distance from below, both distances being 1-Lipschitz — and the segment stays over `T`'s
-    /// face (both ends project inside it; the face's region is convex), `f` is exactly the signed
-    /// distance to `T`'s plane on both sides of it, and the frame normal is `T`'s interpolated
-    /// vertex normal (affine in the segment) or its face normal. `None` elsewhere.
-    fn single_face_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> Option<SegmentBound> {
-        let (near, second) = self.grid.closest_two(&self.triangles, p)?;
-        let tri = &self.triangles[near.triangle as usize];
-        if near.feature != Feature::Face || tri.n == DVec3::ZERO {
+    /// The common case of a thin shell, in O(1): a piece of the segment inside the certified
+    /// region of one triangle `T` ([`region`]), where `f` is exactly the signed distance to `T`'s
+    /// plane and the frame normal is `T`'s interpolated vertex normal (affine along the piece)
+    /// or its face normal. Tries the triangle recorded at `p` (closest there), then asks for the
+    /// closest one when that piece is short. `None` when neither certifies `p`.
+    fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> Option<SegmentBound> {
+        let piece_of = |i: u32| self.regions[i as usize].piece(self.triangles[i as usize].n, p, d, length).map(|piece| (i, piece.length));
+        let hinted = cache.hint.filter(|(q, _)| *q == p).and_then(|(_, i)| piece_of(i));
+        let (i, piece) = match hinted {
+            Some(found) if found.1 >= SHORT_PIECE * length => found,
+            _ => {
+                let closest = self.closest(p).triangle;
+                match (hinted, piece_of(closest)) {
+                    (Some(a), Some(b)) => if a.1 >= b.1 { a } else { b },
+                    (a, b) => a.or(b)?,
+                }
+            }
+        };
+        // A sliver (the start on the region's boundary, up to rounding) would not advance.
+        if piece < MIN_PIECE * length {
             return None;
         }
-        let reach = 0.5 * (second - near.distance_sq.sqrt()) * (1.0 - 1e-9) - self.epsilon;
-        // A much shorter piece would cost more segments than the general bound costs.
-        if !(reach > 0.5 * length) {
-            return None;
-        }
-        let piece = length.min(reach);
-        let end = closest_on_triangle(tri, p + piece * d, near.triangle);
-        if end.feature != Feature::Face {
-            return None;
-        }
-        let plane = [tri.n.dot(p - tri.p[0]), tri.n.dot(p + piece * d - tri.p[0])];
+        let tri = &self.triangles[i as usize];
+        let end_p = p + piece * d;
+        let (start, end) = (closest_on_triangle(tri, p, i), closest_on_triangle(tri, end_p, i));
+        let plane = [tri.n.dot(p - tri.p[0]), tri.n.dot(end_p - tri.p[0])];
         let pad = PAD * self.epsilon;
         let cos = match tri.shading {
             None => [d.dot(tri.n); 2],
             Some(ns) => {
-                // m(s) = Σ b_i(s) n_i is affine along the segment; |m| is convex, so its minimum
-                // over the segment is at the end points or at the foot of the perpendicular.
+                // m(s) = Σ b_i(s) n_i is affine along the piece; |m| is convex, so its minimum
+                // over the piece is at an end or at the foot of the perpendicular.
                 let m = |b: DVec3| b.x * ns[0] + b.y * ns[1] + b.z * ns[2];
-                let (m0, m1) = (m(near.barycentric), m(end.barycentric));
+                let (m0, m1) = (m(start.barycentric), m(end.barycentric));
                 let dm = m1 - m0;
                 let foot = if dm.length_squared() > 0.0 { (-m0.dot(dm) / dm.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
                 let min_len = (m0 + foot * dm).length().max(tri.shading_min_length);
@@ -356,14 +377,14 @@ impl TriangleMesh {
             }
         };
         cache.candidates.clear();
-        cache.candidates.push(near.triangle);
-        let end_point = self.surface_point(p + piece * d, &end);
+        cache.candidates.push(i);
+        cache.hint = Some((end_p, i));
         Some(SegmentBound {
             length: piece,
             f_lo: [plane[0] - pad, plane[1] - pad],
             f_hi: [plane[0] + pad, plane[1] + pad],
             cos: [(cos[0] - 1e-12).max(-1.0), (cos[1] + 1e-12).min(1.0)],
-            end: Some(end_point),
+            end: Some(self.surface_point(end_p, &end)),
         })
     }
 }
@@ -375,15 +396,21 @@ impl MeanSurface for TriangleMesh {
         Ok(self.surface_point(p, &self.closest(p)))
     }
 
+    fn start_point(&self, p: DVec3, cache: &mut MeshCache) -> Result<SurfacePoint> {
+        let closest = self.closest(p);
+        cache.hint = Some((p, closest.triangle));
+        Ok(self.surface_point(p, &closest))
+    }
+
     fn point_on_segment(&self, p: DVec3, cache: &MeshCache) -> Result<SurfacePoint> {
         if cache.candidates.is_empty() {
             return self.point(p);
         }
-        Ok(self.surface_point(p, &closest_among(&self.triangles, p, &cache.candidates)))
+        Ok(self.surface_point(p, &closest_among(&self.triangles, p, &cache.candidates, Closest::NONE)))
     }
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> Result<SegmentBound> {
-        if let Some(bound) = self.single_face_bound(p, d, length, cache) {
+        if let Some(bound) = self.certified_bound(p, d, length, cache) {
             return Ok(bound);
         }
         // The candidates: the union of the grid's lists along the segment, less the triangles
@@ -509,8 +536,23 @@ impl MeanSurface for TriangleMesh {
         // Padding by the rounding scale of the coordinates.
         let cos = [(cos[0] - 1e-12).clamp(-1.0, 1.0), (cos[1] + 1e-12).clamp(-1.0, 1.0)];
         let pad = |v: [f64; 2], by: f64| [v[0] + by, v[1] + by];
-        let end = self.surface_point(p + piece * d, &closest_of(&last));
+        let end_closest = closest_of(&last);
+        cache.hint = Some((p + piece * d, end_closest.triangle));
+        let end = self.surface_point(p + piece * d, &end_closest);
         Ok(SegmentBound { length: piece, f_lo: pad(f_lo, -PAD * eps), f_hi: pad(f_hi, PAD * eps), cos, end: Some(end) })
+    }
+
+    /// Exact while the ray stays in the certified region of the triangle closest at `p`: up to
+    /// the plane distance's crossing of `level`, else to the region's end.
+    fn clearance(&self, start: &SurfacePoint, p: DVec3, d: DVec3, level: f64, cache: &mut MeshCache) -> f64 {
+        let lipschitz = start.f - level;
+        let Some((_, i)) = cache.hint.filter(|(q, _)| *q == p) else { return lipschitz };
+        let tri = &self.triangles[i as usize];
+        let Some(piece) = self.regions[i as usize].piece(tri.n, p, d, f64::INFINITY) else { return lipschitz };
+        // f = n·(q − p0) along the piece.
+        let (f0, slope) = (tri.n.dot(p - tri.p[0]), tri.n.dot(d));
+        let exact = if slope < 0.0 { ((f0 - level) / -slope).min(piece.length) } else { piece.length };
+        (exact * (1.0 - 1e-9) - PAD * self.epsilon).max(lipschitz)
     }
 
     fn distance_bound(&self, p: DVec3) -> f64 {
@@ -538,3 +580,5 @@ fn dpdu(p: &[DVec3; 3], n: DVec3, uv: Option<[DVec2; 3]>) -> DVec3 {
     }
     n.any_orthonormal_pair().0
 }
+
+

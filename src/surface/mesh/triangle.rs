@@ -56,11 +56,17 @@ pub(super) fn closer(a: &Closest, b: &Closest) -> bool {
     a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.triangle < b.triangle)
 }
 
-/// The closest point among `candidates`, by [`closer`].
-pub(super) fn closest_among(triangles: &[Triangle], p: DVec3, candidates: &[u32]) -> Closest {
-    let mut best = Closest::NONE;
+/// The closest point among `candidates`, by [`closer`], starting from `best` (e.g.
+/// [`Closest::NONE`]). A triangle whose bounding sphere is farther than the best so far is
+/// skipped (`>`: an equally distant one may still win the tie).
+pub(super) fn closest_among(triangles: &[Triangle], p: DVec3, candidates: &[u32], mut best: Closest) -> Closest {
     for &i in candidates {
-        let c = closest_on_triangle(&triangles[i as usize], p, i);
+        let t = &triangles[i as usize];
+        let gap = (p - t.centre).length() - t.radius;
+        if gap > 0.0 && gap * gap > best.distance_sq * (1.0 + 1e-12) {
+            continue;
+        }
+        let c = closest_on_triangle(t, p, i);
         if closer(&c, &best) {
             best = c;
         }

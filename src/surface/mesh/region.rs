@@ -1,0 +1,245 @@
+//! Certified face regions: where one triangle is provably the closest, so that the signed
+//! distance is exactly the distance to its plane and a thin shell's segment bound costs O(1).
+//!
+//! For triangle `T` (unit normal `n`) and a side `s = ±1`, a point `p = x + t s n` with its foot
+//! `x` in `T` and `t >= 0` is at distance `t` from `T`. It is at least as far from another
+//! triangle `T'` whenever some unit `u` gives `dist(p, T') >= u·p − max_{y∈T'} u·y >= t`, i.e.
+//!
+//! `t (1 − s u·n) <= u·x − max_{y∈T'} u·y`,
+//!
+//! a condition affine in `x` (and linear in `t`). With `u = s n` it holds for all `t` when `T'`
+//! lies wholly on the other side of `T`'s plane (the convex side of a surface needs nothing
+//! else); with `u = ±n'` (the plane of `T'`) it gives `t <= e cot(θ/2)` at distance `e` from a
+//! concave edge of dihedral angle `θ`. Over the *inset* `{x : e_i(x) >= m}` (`e_i` the distance
+//! to edge `i`'s line, `m` a margin), the affine right-hand side is smallest at the inset's
+//! corners, so each margin gets a certified height `H_s(m)`. Only triangles within `2 H_max` of
+//! `T` can compete below `H_max`.
+//!
+//! The region `{e_i >= m, 0 <= t <= H_s(m)}` is convex, and so is its union with the mirrored
+//! one across the face: a segment whose two ends lie in it lies in it, and there `f = n·p − n·p0`
+//! exactly and the frame normal is `T`'s (interpolated) normal.
+
+use super::bvh::Bvh;
+use super::triangle::Triangle;
+use glam::DVec3;
+
+/// Margins from the edges, as fractions of the inradius: a larger margin keeps segments away
+/// from the edges (where concave neighbours compete) and certifies higher.
+const MARGINS: [f64; LEVELS] = [0.0, 1.0 / 128.0, 1.0 / 32.0, 1.0 / 8.0, 0.25, 0.5];
+const LEVELS: usize = 6;
+/// The certified heights stop at this many longest edges of the triangle (a shell that thick
+/// spans many triangles and takes the general bound anyway).
+const HEIGHT_EDGES: f64 = 0.5;
+
+/// One triangle's certified regions on both sides of its face.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct FaceRegion {
+    /// `e_i(p) = inward[i]·p + offset[i]`: the distance from `p`'s projection on the plane to
+    /// the line of edge `i` (corner `i` to `i + 1`), positive inside.
+    inward: [DVec3; 3],
+    offset: [f64; 3],
+    /// `t(p) = n·p − plane`.
+    plane: f64,
+    margin: [f64; LEVELS],
+    /// Certified heights above (`[0]`) and below (`[1]`) the face for each margin; 0 where
+    /// nothing is certified (degenerate triangles).
+    height: [[f64; LEVELS]; 2],
+}
+
+/// A certified piece of a segment: `f` is the plane distance of its triangle along it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Piece {
+    pub length: f64,
+}
+
+impl FaceRegion {
+    const NONE: FaceRegion = FaceRegion { inward: [DVec3::ZERO; 3], offset: [0.0; 3], plane: 0.0, margin: [0.0; LEVELS], height: [[0.0; LEVELS]; 2] };
+
+    /// The certified regions of every triangle (in the hierarchy's order); `epsilon` is the
+    /// rounding scale of the coordinates, taken off every certified height.
+    pub fn build(bvh: &Bvh, triangles: &[Triangle], epsilon: f64) -> Vec<FaceRegion> {
+        let mut near = Vec::new();
+        (0..triangles.len()).map(|i| Self::of(bvh, triangles, i, epsilon, &mut near)).collect()
+    }
+
+    fn of(bvh: &Bvh, triangles: &[Triangle], i: usize, epsilon: f64, near: &mut Vec<u32>) -> FaceRegion {
+        let t = &triangles[i];
+        let n = t.n;
+        if n == DVec3::ZERO {
+            return FaceRegion::NONE;
+        }
+        let edge = |k: usize| t.p[(k + 1) % 3] - t.p[k];
+        let lengths = [0, 1, 2].map(|k| edge(k).length());
+        let perimeter: f64 = lengths.iter().sum();
+        let twice_area = edge(0).cross(t.p[2] - t.p[0]).length();
+        let inradius = twice_area / perimeter;
+        if !(inradius > 0.0) {
+            return FaceRegion::NONE;
+        }
+        let inward = [0, 1, 2].map(|k| n.cross(edge(k)).normalize());
+        let offset = [0, 1, 2].map(|k| -inward[k].dot(t.p[k]));
+        // The incentre, and the corners of the inset at margin m: the triangle scaled about it.
+        let incentre = (lengths[1] * t.p[0] + lengths[2] * t.p[1] + lengths[0] * t.p[2]) / perimeter;
+        let margin = MARGINS.map(|f| f * inradius);
+        let corners = |m: f64| t.p.map(|c| incentre + (1.0 - m / inradius) * (c - incentre));
+        let h_max = HEIGHT_EDGES * lengths.iter().copied().fold(0.0, f64::max);
+
+        let mut height = [[h_max; LEVELS]; 2];
+        let insets = margin.map(corners);
+        // Competitors within 2 h_max of T: within 2 h_max + T's radius of its centre; nearest
+        // first, since a triangle at distance D from T constrains only heights above D/2.
+        let complete = bvh.within(triangles, t.centre, 2.0 * h_max + t.radius, usize::MAX, near);
+        debug_assert!(complete);
+        let gap = |j: u32| {
+            let o = &triangles[j as usize];
+            (t.centre - o.centre).length() - t.radius - o.radius
+        };
+        near.sort_by(|&a, &b| gap(a).total_cmp(&gap(b)));
+        for &j in near.iter() {
+            if j as usize == i {
+                continue;
+            }
+            let highest = height.iter().flatten().copied().fold(0.0, f64::max);
+            if 0.5 * gap(j) > highest {
+                break;
+            }
+            let other = &triangles[j as usize];
+            // A neighbour sharing one corner: the bound of the cones at that corner.
+            let mut shared = (0..3).filter(|&k| other.p.contains(&t.p[k]));
+            let corner = match (shared.next(), shared.next()) {
+                (Some(k), None) => Some(k),
+                _ => None,
+            };
+            for (side, s) in [(0, 1.0), (1, -1.0)] {
+                // Directions u, each a valid lower bound: the plane of T (wholly on the far side:
+                // no constraint), the plane of T' either way, and the direction between centroids.
+                let mut candidates: [DVec3; 4] = [s * n, other.n, -other.n, (t.centre - other.centre).normalize_or_zero()];
+                if other.n == DVec3::ZERO {
+                    candidates[1] = DVec3::ZERO;
+                    candidates[2] = DVec3::ZERO;
+                }
+                let cone = corner.and_then(|k| corner_cone(t, k, other, s * n));
+                for level in 0..LEVELS {
+                    let inset = &insets[level];
+                    let by_cone = match (cone, corner) {
+                        (Some(per_distance), Some(k)) => per_distance * (inset[k] - t.p[k]).length(),
+                        _ => 0.0,
+                    };
+                    let best = candidates
+                        .iter()
+                        .filter(|u| **u != DVec3::ZERO)
+                        .map(|&u| certified_height(u, s * n, inset, other, epsilon))
+                        .fold(by_cone, f64::max);
+                    height[side][level] = height[side][level].min(best);
+                }
+            }
+        }
+        // Rounding of the queries' coordinates: certify a little less.
+        let height = height.map(|hs| hs.map(|h| (h * (1.0 - 1e-9) - 4.0 * epsilon).max(0.0)));
+        FaceRegion { inward, offset, plane: n.dot(t.p[0]), margin, height }
+    }
+
+    /// Whether `p` is certified (its heights grow with the margin: the largest margin below
+    /// `p`'s decides).
+    pub fn contains(&self, n: DVec3, p: DVec3) -> bool {
+        let e_min = (0..3).map(|k| self.inward[k].dot(p) + self.offset[k]).fold(f64::INFINITY, f64::min);
+        let t = n.dot(p) - self.plane;
+        match (0..LEVELS).rev().find(|&level| e_min >= self.margin[level]) {
+            Some(level) => if t >= 0.0 { t <= self.height[0][level] } else { -t <= self.height[1][level] },
+            None => false,
+        }
+    }
+
+    /// The longest certified piece of the segment `p + s d`, `s ∈ [0, length]`, of triangle `t`
+    /// (whose region this is); `None` when `p` is not certified.
+    pub fn piece(&self, n: DVec3, p: DVec3, d: DVec3, length: f64) -> Option<Piece> {
+        let e0 = [0, 1, 2].map(|k| self.inward[k].dot(p) + self.offset[k]);
+        let de = [0, 1, 2].map(|k| self.inward[k].dot(d));
+        let (t0, dt) = (n.dot(p) - self.plane, n.dot(d));
+        let e_min = e0[0].min(e0[1]).min(e0[2]);
+        let mut best: Option<f64> = None;
+        for level in (0..LEVELS).rev() {
+            let m = self.margin[level];
+            let [above, below] = [self.height[0][level], self.height[1][level]];
+            if e_min < m || !(t0 <= above && -t0 <= below) || (above == 0.0 && below == 0.0) {
+                continue;
+            }
+            let mut reach = length;
+            for k in 0..3 {
+                if de[k] < 0.0 {
+                    reach = reach.min((e0[k] - m) / -de[k]);
+                }
+            }
+            // The height moves linearly from t0 toward one side's limit.
+            if dt > 0.0 {
+                reach = reach.min((above - t0) / dt);
+            } else if dt < 0.0 {
+                reach = reach.min((below + t0) / -dt);
+            }
+            if reach > best.unwrap_or(0.0) {
+                best = Some(reach);
+            }
+        }
+        best.map(|length| Piece { length })
+    }
+}
+
+/// For a neighbour `other` that shares only corner `k` of `t`: a factor `c` such that every point
+/// `x + τ sn` with `x` in `t` at distance `r` from the corner `v` and `τ <= c r` is at least `τ`
+/// from `other`; `None` when the cones at `v` touch, `∞` when `other` lies wholly on the far side.
+///
+/// With `z = y − v` for `y` in `other` and `h = sn·z > 0`, `|x + τ sn − y| >= τ` iff
+/// `τ <= |r − z|² / (2h)`, and over `|z|` that is at least `|r| (1 − r̂·ẑ)/h >= r (1 − cos γ)/h_max`:
+/// `γ` the least angle between the two triangles' cones at `v`, `h_max` the most `sn·ẑ` over
+/// `other`'s cone.
+fn corner_cone(t: &Triangle, k: usize, other: &Triangle, sn: DVec3) -> Option<f64> {
+    let v = t.p[k];
+    let ends = |tri: &Triangle| {
+        let rest: Vec<DVec3> = tri.p.iter().filter(|q| **q != v).map(|q| (*q - v).normalize_or_zero()).collect();
+        (rest.len() == 2 && rest[0] != DVec3::ZERO && rest[1] != DVec3::ZERO).then(|| [rest[0], rest[1]])
+    };
+    let (a, b) = (ends(t)?, ends(other)?);
+    // The largest w·x over unit x in the cone spanned by `c`: at the projection of w on the
+    // cone's plane when that lies inside, else at an end.
+    let most = |c: [DVec3; 2], w: DVec3| {
+        let normal = c[0].cross(c[1]);
+        let ends = c[0].dot(w).max(c[1].dot(w));
+        let Some(normal) = normal.try_normalize() else { return ends };
+        let q = w - w.dot(normal) * normal;
+        let inside = c[0].cross(q).dot(normal) >= 0.0 && q.cross(c[1]).dot(normal) >= 0.0;
+        if inside && q.length_squared() > 0.0 { q.length().max(ends) } else { ends }
+    };
+    let h_max = most(b, sn) + 1e-12;
+    if h_max <= 0.0 {
+        return Some(f64::INFINITY);
+    }
+    // cos γ: the closest pair has an end of one cone, or lies on both planes' common line.
+    let mut cos_gamma = [most(a, b[0]), most(a, b[1]), most(b, a[0]), most(b, a[1])].into_iter().fold(f64::NEG_INFINITY, f64::max);
+    if let Some(line) = a[0].cross(a[1]).cross(b[0].cross(b[1])).try_normalize() {
+        for l in [line, -line] {
+            if most(a, l) >= 1.0 - 1e-12 && most(b, l) >= 1.0 - 1e-12 {
+                cos_gamma = 1.0;
+            }
+        }
+    }
+    let gap = 1.0 - (cos_gamma + 1e-12).min(1.0);
+    (gap > 0.0).then(|| gap / h_max)
+}
+
+/// The certified height against `other` over the inset triangle `inset` for the direction `u`
+/// (`sn` is the side's normal): the largest `H` with `t (1 − u·sn) <= u·x − max_{y∈T'} u·y` for
+/// all `x` in the inset and `t <= H`; 0 when it fails at `t = 0`, `∞` when unconstrained.
+fn certified_height(u: DVec3, sn: DVec3, inset: &[DVec3; 3], other: &Triangle, epsilon: f64) -> f64 {
+    let reach = other.p.iter().map(|y| u.dot(*y)).fold(f64::NEG_INFINITY, f64::max);
+    let lowest = inset.iter().map(|x| u.dot(*x) - reach).fold(f64::INFINITY, f64::min) - 4.0 * epsilon;
+    let k = 1.0 - u.dot(sn);
+    if k <= 1e-12 {
+        // u = s n: the whole of T' is on the far side (up to rounding), for every height.
+        return if lowest >= -8.0 * epsilon { f64::INFINITY } else { 0.0 };
+    }
+    if lowest < 0.0 {
+        return 0.0;
+    }
+    lowest / k
+}
+

@@ -53,7 +53,8 @@ pub(super) struct Piece {
 }
 
 impl FaceRegion {
-    const NONE: FaceRegion = FaceRegion { inward: [DVec3::ZERO; 3], offset: [0.0; 3], plane: 0.0, margin: [0.0; LEVELS], height: [[0.0; LEVELS]; 2] };
+    /// Certifies nothing (no point is that far inside).
+    const NONE: FaceRegion = FaceRegion { inward: [DVec3::ZERO; 3], offset: [0.0; 3], plane: 0.0, margin: [f64::INFINITY; LEVELS], height: [[0.0; LEVELS]; 2] };
 
     /// The certified regions of every triangle (in the hierarchy's order); `epsilon` is the
     /// rounding scale of the coordinates, taken off every certified height.

@@ -28,3 +28,30 @@ for object in homogeneous roughconductor macrofacet; do
     seconds=$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.2f", (b - a) / 1e9 }')
     printf '%-15s %7s s    Mitsuba 3.9.1 at 512x512/64 spp: %s\n' "$object" "$seconds" "${mitsuba[$object]}"
 done
+
+# The tracking targets (the library owns the volume event): a thin macrofacet shell against the
+# same object as a Mitsuba-style roughconductor surface, one thread, runs alternated (A B A B A B)
+# so that drift of a shared machine cancels in the median CPU-time ratio.
+cpu_seconds() {  # COMMAND... -> user + system CPU seconds of the command
+    local TIMEFORMAT='%3U %3S'
+    { time "$@" >/dev/null 2>&1; } 2>&1 | awk '{ print $1 + $2 }'
+}
+median() { sort -g | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
+paired_ratio() {  # LABEL "COMMAND A" "COMMAND B"
+    local label=$1 a=$2 b=$3 ratios=() ta tb
+    for _ in 1 2 3; do
+        ta=$(cpu_seconds $a); tb=$(cpu_seconds $b)
+        ratios+=("$(awk -v x="$ta" -v y="$tb" 'BEGIN { printf "%.3f", x / y }')")
+    done
+    printf '%-58s %6.2fx   (A %s s, B %s s, last pair)\n' "$label" "$(printf '%s\n' "${ratios[@]}" | median)" "$ta" "$tb"
+}
+r="bench/anchor.xml -D res=256 -D spp=16 --threads 1 --quiet -o $out/pair.exr"
+echo "== tracking targets: CPU-time ratios, median of 3 alternated pairs, 1 thread"
+paired_ratio "sphere thin shell / roughconductor (target <= 1.5)" "$mfrender $r -D object=macrofacet" "$mfrender $r -D object=roughconductor"
+paired_ratio "torus thin shell / roughconductor (target <= 2)" "$mfrender $r -D object=torus_macrofacet" "$mfrender $r -D object=torus_roughconductor"
+g="bench/gpis_compare.xml -D spp=32 -D res=96 --threads 1 --quiet -o $out/pair.exr"
+paired_ratio "gpis / macrofacet at equal spp (equal MSE: compare_gpis.sh)" "$mfrender $g -D method=gpis" "$mfrender $g -D method=macrofacet"
+start=$(date +%s%N)
+"$mfrender" scenes/default.xml -o "$out/default.exr" --quiet
+end=$(date +%s%N)
+echo "default scene (480x270, 20 spp, $(nproc) threads): $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", (b - a) / 1e9 }') s wall (target <= 8 s)"

@@ -34,6 +34,10 @@ use crate::rng::Pcg32;
 use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
 use glam::DVec3;
 
+/// The PCG32 stream ("mftrack") of the C ABI's tracking calls: `mf_track_*` with `seed` equals
+/// [`Tracker`] with `Pcg32::new(seed, TRACK_STREAM)`.
+pub const TRACK_STREAM: u64 = 0x6d66_7472_6163_6b;
+
 /// Counts of one tracking call, for tests and benchmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TrackStats {

@@ -411,3 +411,132 @@ fn gpis_trace_equals_the_core_for_the_same_seed() {
     assert!(calls > 0 && hits == 200, "{hits} hits, {calls} callback calls");
     unsafe { mf_gpis_free(gpis) };
 }
+
+/// A plane `z = 0.3` (interior below) implemented with C callbacks, for the callback surface.
+unsafe extern "C" fn plane_point(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    unsafe { *out = mf_surface_point { f: p.z - 0.3, normal: v(DVec3::Z), tangent: v(DVec3::X) } };
+    0
+}
+
+/// `mf_track_free_flight`, `mf_track_transmittance` and their batches give exactly what the
+/// core `Tracker` gives on the same surface with the documented seed stream, for a sphere, a
+/// mesh (with vertex normals) and a host callback surface; the counts agree too.
+#[test]
+fn tracking_calls_equal_the_core_bit_for_bit() {
+    use macrofacet::rng::Pcg32;
+    use macrofacet::surface::{MeanSurface, Sphere, TriangleMesh};
+    use macrofacet::tracking::{TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
+
+    // An octahedron with vertex normals.
+    let positions: Vec<f64> = vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
+    let indices: Vec<u32> = vec![0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    let (mut sphere_h, mut mesh_h, mut plane_h) = (ptr::null_mut(), ptr::null_mut(), ptr::null_mut());
+    let pole = DVec3::new(0.0, 0.6, 0.8);
+    let callbacks = mf_surface_callbacks {
+        point: Some(plane_point),
+        bound: None,
+        shape: MF_SURFACE_CONVEX,
+        bounds_min: v(DVec3::NEG_INFINITY),
+        bounds_max: v(DVec3::new(f64::INFINITY, f64::INFINITY, 0.3)),
+    };
+    unsafe {
+        assert_eq!(mf_surface_new_sphere(v(DVec3::new(0.1, -0.2, 0.3)), 0.9, false, v(pole), &mut sphere_h), mf_status::MF_OK);
+        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: positions.as_ptr(), uvs: ptr::null() };
+        assert_eq!(mf_surface_new_mesh(&mesh, &mut mesh_h), mf_status::MF_OK);
+        assert_eq!(mf_surface_new_callbacks(&callbacks, &mut plane_h), mf_status::MF_OK);
+    }
+    let sphere = Sphere::new(DVec3::new(0.1, -0.2, 0.3), 0.9, false, pole).unwrap();
+    let points: Vec<DVec3> = positions.chunks_exact(3).map(DVec3::from_slice).collect();
+    let tris: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let octahedron = TriangleMesh::new(&points, &tris, Some(&points), None).unwrap();
+
+    fn compare<S: MeanSurface>(name: &str, handle: *const mf_surface, medium: *const mf_medium, core: &MacrofacetMedium, surface: &S, rng: &mut Rng) {
+        let tracker = Tracker::new(core, surface);
+        let mut queries = Vec::new();
+        for i in 0..300u64 {
+            // Rays from around the shell towards the surface, some leaving it, some unbounded.
+            let origin = rng.direction() * (0.6 + 0.8 * rng.next());
+            let d = rng.direction().normalize();
+            let t_max = if i % 3 == 0 { f64::INFINITY } else { 2.0 * rng.next() };
+            queries.push(mf_track_query { origin: v(origin), d: v(d), t_max, seed: i * 7919 + 1 });
+        }
+        let stats = |s: &TrackStats| mf_track_stats { surface_queries: s.surface_queries, segments: s.segments, tentative_collisions: s.tentative_collisions, majorant_violations: s.majorant_violations };
+        let mut flights = vec![unsafe { std::mem::zeroed::<mf_collision>() }; queries.len()];
+        let mut shadows = vec![unsafe { std::mem::zeroed::<mf_transmittance>() }; queries.len()];
+        unsafe {
+            assert_eq!(mf_track_free_flight_batch(medium, handle, ptr::null_mut(), queries.as_ptr(), queries.len(), flights.as_mut_ptr()), mf_status::MF_OK);
+            assert_eq!(mf_track_transmittance_batch(medium, handle, ptr::null_mut(), queries.as_ptr(), queries.len(), shadows.as_mut_ptr()), mf_status::MF_OK);
+        }
+        let (mut scattered, mut partial) = (0, 0);
+        for (i, q) in queries.iter().enumerate() {
+            // The documented preprocessing: the direction checked and renormalised.
+            let (o, d) = (dv(q.origin), check_direction("d", dv(q.d)).unwrap());
+            let ctx = format!("{name}, query {i}");
+            let mut c = unsafe { std::mem::zeroed::<mf_collision>() };
+            let mut t = unsafe { std::mem::zeroed::<mf_transmittance>() };
+            unsafe {
+                assert_eq!(mf_track_free_flight(medium, handle, ptr::null_mut(), q, &mut c), mf_status::MF_OK, "{ctx}");
+                assert_eq!(mf_track_transmittance(medium, handle, ptr::null_mut(), q, &mut t), mf_status::MF_OK, "{ctx}");
+            }
+            assert_eq!(c, flights[i], "{ctx}: batch and single free flights differ");
+            assert_eq!(t, shadows[i], "{ctx}: batch and single transmittances differ");
+            let mut s = TrackStats::default();
+            match tracker.sample_free_flight(o, d, q.t_max, &mut Pcg32::new(q.seed, TRACK_STREAM), &mut s).unwrap() {
+                TrackedFlight::Scatter { t: tc, point } => {
+                    scattered += 1;
+                    assert!(c.scattered, "{ctx}: the core scatters");
+                    assert_eq!((c.t.to_bits(), c.f.to_bits()), (tc.to_bits(), point.f.to_bits()), "{ctx}: collision");
+                    assert_eq!(dv(c.p), o + tc * d, "{ctx}: collision point");
+                    assert_eq!((dv(c.frame.normal), dv(c.frame.tangent)), (point.normal, point.tangent), "{ctx}: frame");
+                }
+                TrackedFlight::Pass => {
+                    assert!(!c.scattered, "{ctx}: the core passes");
+                    assert_eq!(c.t.to_bits(), q.t_max.to_bits(), "{ctx}: a pass reports t_max");
+                }
+            }
+            assert_eq!(c.stats, stats(&s), "{ctx}: free-flight counts");
+            let mut s = TrackStats::default();
+            let tc = tracker.transmittance(o, d, q.t_max, &mut Pcg32::new(q.seed, TRACK_STREAM), &mut s).unwrap();
+            assert_eq!(t.transmittance.to_bits(), tc.to_bits(), "{ctx}: transmittance");
+            assert_eq!(t.stats, stats(&s), "{ctx}: transmittance counts");
+            assert_eq!(t.stats.majorant_violations + c.stats.majorant_violations, 0, "{ctx}: violations");
+            if tc > 0.0 && tc < 1.0 {
+                partial += 1;
+            }
+        }
+        // The rays exercise both outcomes and fractional transmittances (the test can fail).
+        assert!(scattered > 30 && scattered < 270, "{name}: {scattered} of 300 scattered");
+        assert!(partial > 10, "{name}: only {partial} fractional transmittances");
+    }
+
+    let mut rng = Rng(777);
+    for (name, params) in [("thin beckmann", vec![P::F("sigma", 0.02), P::S("distribution", "beckmann"), P::F("alpha_u", 0.2), P::F("alpha_v", 0.4), P::S("material", "Au")]), ("thick gpss", vec![P::F("sigma", 0.15), P::F("alpha", 0.5)])] {
+        let (medium, core) = media(&params);
+        compare(&format!("{name} sphere"), sphere_h, medium, &core, &sphere, &mut rng);
+        compare(&format!("{name} octahedron"), mesh_h, medium, &core, &octahedron, &mut rng);
+        let plane = PlaneSurface;
+        compare(&format!("{name} callback plane"), plane_h, medium, &core, &plane, &mut rng);
+        unsafe { mf_medium_free(medium) };
+    }
+    unsafe {
+        mf_surface_free(sphere_h);
+        mf_surface_free(mesh_h);
+        mf_surface_free(plane_h);
+    }
+}
+
+/// The callback plane of [`tracking_calls_equal_the_core_bit_for_bit`] in the core.
+struct PlaneSurface;
+impl macrofacet::surface::MeanSurface for PlaneSurface {
+    type Cache = ();
+    fn point(&self, p: DVec3) -> macrofacet::Result<macrofacet::surface::SurfacePoint> {
+        Ok(macrofacet::surface::SurfacePoint { f: p.z - 0.3, normal: DVec3::Z, tangent: DVec3::X })
+    }
+    fn bound(&self, start: &macrofacet::surface::SurfacePoint, p: DVec3, d: DVec3, length: f64, _: f64, _: &mut ()) -> macrofacet::Result<macrofacet::surface::SegmentBound> {
+        let end = self.point(p + length * d)?;
+        Ok(macrofacet::surface::convex_bound(start, &end, d, length, macrofacet::surface::Curvature::Convex))
+    }
+    fn bounding_box(&self) -> macrofacet::surface::Aabb {
+        macrofacet::surface::Aabb { min: DVec3::NEG_INFINITY, max: DVec3::new(f64::INFINITY, f64::INFINITY, 0.3) }
+    }
+}

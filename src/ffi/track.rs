@@ -3,8 +3,9 @@
 //! local frame, or a transmittance estimate for a shadow ray. Segments, majorants, frames and
 //! the planar closed forms stay inside the library (see `src/tracking.rs`).
 //!
-//! Random numbers: each call takes a 64-bit `seed` and runs its own PCG32 from it (tracking needs
-//! an unbounded count of random numbers); the same seed gives the same result. Hosts derive the
+//! Random numbers: each call takes a 64-bit `seed` and runs its own PCG32 from it on the stream
+//! [`TRACK_STREAM`] (tracking needs an unbounded count of random numbers); the same seed gives
+//! the same result. Hosts derive the
 //! seed from their sampler (e.g. a hash of pixel, sample index and bounce).
 
 use super::medium::{mf_frame, mf_medium, mf_vec3};
@@ -15,12 +16,9 @@ use crate::frame::check_direction;
 use crate::medium::MacrofacetMedium;
 use crate::rng::Pcg32;
 use crate::surface::MeanSurface;
-use crate::tracking::{TrackStats, TrackedFlight, Tracker};
+use crate::tracking::{TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
 use glam::DVec3;
 use std::ffi::c_void;
-
-/// The PCG32 stream of tracking calls ("mftrack").
-const TRACK_STREAM: u64 = 0x6d66_7472_6163_6b;
 
 /// One tracking query: the ray `origin + t d` (`d` unit, world space), `t ∈ [0, t_max]`
 /// (`t_max` may be `+inf`), inside the medium's region; `seed` drives the call's random numbers.

@@ -70,9 +70,11 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
             }
         }
     }
+    // Depth first, so that consecutive queries are close: the surface may reuse the last one.
+    let mut cache = S::Cache::default();
     while let Some((first, size)) = stack.pop() {
         let block_centre = lo + (first.as_dvec3() + 0.5 * size as f64) * h;
-        let f = surface.point(block_centre)?.f;
+        let f = surface.start_point(block_centre, &mut cache)?.f;
         if size == 1 {
             kept[index(first)] = f - half_diagonal < level;
             continue;

@@ -39,9 +39,9 @@ impl Bvh {
         (self.nodes[0].min, self.nodes[0].max)
     }
 
-    /// The closest point of the whole mesh to `p`.
-    pub fn closest(&self, triangles: &[Triangle], p: DVec3) -> Closest {
-        let mut best = Closest::NONE;
+    /// The closest point of the whole mesh to `p`, starting from `best` (a triangle's closest
+    /// point near the answer prunes most of the hierarchy; [`Closest::NONE`] for none).
+    pub fn closest(&self, triangles: &[Triangle], p: DVec3, mut best: Closest) -> Closest {
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {

@@ -9,7 +9,7 @@
 //! rounding, so it also serves points a hair outside the cell).
 
 use super::bvh::Bvh;
-use super::triangle::{closest_on_triangle, Triangle};
+use super::triangle::{closest_on_triangle, Closest, Triangle};
 use glam::{DVec3, IVec3};
 
 /// Cells whose centre is farther than this many cells from the surface get no list (queries
@@ -57,17 +57,20 @@ impl CellGrid {
         // A descent through blocks halving down to cells: a block whose centre is farther than
         // the band plus its half diagonal holds no band cell, and bounds its cells' distances.
         let blocks = dims / BLOCK;
-        let mut stack: Vec<(IVec3, i32)> = Vec::new();
+        // With each block, the triangle closest to its parent's centre: it seeds the search.
+        let mut stack: Vec<(IVec3, i32, Option<u32>)> = Vec::new();
         for bz in 0..blocks.z {
             for by in 0..blocks.y {
                 for bx in 0..blocks.x {
-                    stack.push((IVec3::new(bx, by, bz) * BLOCK, BLOCK));
+                    stack.push((IVec3::new(bx, by, bz) * BLOCK, BLOCK, None));
                 }
             }
         }
-        while let Some((first, size)) = stack.pop() {
+        while let Some((first, size, seed)) = stack.pop() {
             let block_centre = origin + (first.as_dvec3() + 0.5 * size as f64) * h;
-            let d_block = bvh.closest(triangles, block_centre).distance_sq.sqrt();
+            let seed = seed.map_or(Closest::NONE, |i| closest_on_triangle(&triangles[i as usize], block_centre, i));
+            let nearest = bvh.closest(triangles, block_centre, seed);
+            let d_block = nearest.distance_sq.sqrt();
             let block_half_diagonal = half_diagonal * size as f64;
             if size > 1 && d_block - block_half_diagonal > band {
                 // Every point of a cell is at least d_block minus its distance from the centre.
@@ -87,7 +90,7 @@ impl CellGrid {
                 for z in 0..2 {
                     for y in 0..2 {
                         for x in 0..2 {
-                            stack.push((first + IVec3::new(x, y, z) * half, half));
+                            stack.push((first + IVec3::new(x, y, z) * half, half, Some(nearest.triangle)));
                         }
                     }
                 }

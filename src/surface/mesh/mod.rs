@@ -221,12 +221,26 @@ impl TriangleMesh {
     /// by the hierarchy.
     /// Most queries of a thin shell are settled by the certified region ([`region`]) of one
     /// triangle of the cell's list, a test much cheaper than a closest point.
-    fn closest(&self, p: DVec3) -> Closest {
-        let Some(list) = self.grid.list_at(p) else { return self.bvh.closest(&self.triangles, p) };
-        if let Some(&i) = list.iter().find(|&&i| self.regions[i as usize].contains(self.triangles[i as usize].n, p)) {
+    /// `hint`: a triangle closest to a point nearby (e.g. the previous one along a ray), tried
+    /// first, and outside the grid the seed of the hierarchy's search.
+    fn closest(&self, p: DVec3, hint: Option<u32>) -> Closest {
+        let certified = |i: u32| self.regions[i as usize].contains(self.triangles[i as usize].n, p);
+        if let Some(i) = hint.filter(|&i| certified(i)) {
+            return closest_on_triangle(&self.triangles[i as usize], p, i);
+        }
+        let Some(list) = self.grid.list_at(p) else {
+            let seed = hint.map_or(Closest::NONE, |i| closest_on_triangle(&self.triangles[i as usize], p, i));
+            return self.bvh.closest(&self.triangles, p, seed);
+        };
+        if let Some(&i) = list.iter().find(|&&i| certified(i)) {
             return closest_on_triangle(&self.triangles[i as usize], p, i);
         }
         closest_among(&self.triangles, p, list, Closest::NONE)
+    }
+
+    /// The triangle recorded in `cache` as closest to a point of the current ray.
+    fn hint(cache: &MeshCache) -> Option<u32> {
+        cache.hint.map(|(_, i)| i)
     }
 
     /// The surface point of a closest-point result.
@@ -312,12 +326,16 @@ impl TriangleMesh {
     /// `|f(p)|` of the start the sign of `f` cannot change, so one side is the chord of the
     /// distance to the triangle closest at the start (`|f| <= d_T`, convex) and the other the
     /// Lipschitz line; beyond, both are Lipschitz lines. Any frame normal.
-    fn far_bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64) -> SegmentBound {
+    fn far_bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &MeshCache) -> SegmentBound {
         let reach = start.f.abs() * (1.0 - 1e-12);
         let length = length.min(reach.max(0.5 * tolerance)).max(f64::MIN_POSITIVE);
         let mut bound = SegmentBound::lipschitz(start.f, length);
         if length <= reach {
-            let nearest = self.closest(p).triangle;
+            // The triangle closest at the start, when the cache recorded it there.
+            let nearest = match cache.hint {
+                Some((q, i)) if q == p => i,
+                _ => self.closest(p, Self::hint(cache)).triangle,
+            };
             let end = closest_on_triangle(&self.triangles[nearest as usize], p + length * d, nearest);
             let chord = [start.f.abs() + PAD * self.epsilon, end.distance_sq.sqrt() + PAD * self.epsilon];
             if start.f > 0.0 {
@@ -342,7 +360,7 @@ impl TriangleMesh {
         let (i, piece) = match hinted {
             Some(found) if found.1 >= SHORT_PIECE * length => found,
             _ => {
-                let closest = self.closest(p).triangle;
+                let closest = self.closest(p, Self::hint(cache)).triangle;
                 match (hinted, piece_of(closest)) {
                     (Some(a), Some(b)) => if a.1 >= b.1 { a } else { b },
                     (a, b) => a.or(b)?,
@@ -393,11 +411,11 @@ impl MeanSurface for TriangleMesh {
     type Cache = MeshCache;
 
     fn point(&self, p: DVec3) -> Result<SurfacePoint> {
-        Ok(self.surface_point(p, &self.closest(p)))
+        Ok(self.surface_point(p, &self.closest(p, None)))
     }
 
     fn start_point(&self, p: DVec3, cache: &mut MeshCache) -> Result<SurfacePoint> {
-        let closest = self.closest(p);
+        let closest = self.closest(p, Self::hint(cache));
         cache.hint = Some((p, closest.triangle));
         Ok(self.surface_point(p, &closest))
     }
@@ -419,24 +437,24 @@ impl MeanSurface for TriangleMesh {
         // Away from the surface (outside the grid's band) or with many candidates, the cheap
         // bound costs less than the tentative collisions that a tight one would save.
         let end_p = p + length * d;
-        let end_closest = self.closest(end_p);
+        if !self.grid.segment(p, d, length, &mut cache.candidates) {
+            cache.candidates.clear();
+            return Ok(self.far_bound(start, p, d, length, tolerance, cache));
+        }
+        let end_closest = self.closest(end_p, Self::hint(cache));
         let f_end = self.surface_point(end_p, &end_closest).f;
         let tent = (start.f.abs(), f_end.abs());
-        let found = self.grid.segment(p, d, length, &mut cache.candidates) && {
-            // Drop the triangles whose bounding sphere stays beyond the tent from the segment.
-            let reach = 0.5 * (tent.0 + tent.1 + length) * (1.0 + 1e-9) + self.epsilon;
-            cache.candidates.retain(|&i| {
-                let t = &self.triangles[i as usize];
-                let along = (t.centre - p).dot(d).clamp(0.0, length);
-                (t.centre - (p + along * d)).length() - t.radius <= reach
-            });
-            cache.candidates.len() <= MAX_CANDIDATES
-        };
-        let found = found.then_some((end_closest, f_end, tent));
-        let Some((end_closest, f_end, tent)) = found else {
+        // Drop the triangles whose bounding sphere stays beyond the tent from the segment.
+        let reach = 0.5 * (tent.0 + tent.1 + length) * (1.0 + 1e-9) + self.epsilon;
+        cache.candidates.retain(|&i| {
+            let t = &self.triangles[i as usize];
+            let along = (t.centre - p).dot(d).clamp(0.0, length);
+            (t.centre - (p + along * d)).length() - t.radius <= reach
+        });
+        if cache.candidates.len() > MAX_CANDIDATES {
             cache.candidates.clear();
-            return Ok(self.far_bound(start, p, d, length, tolerance));
-        };
+            return Ok(self.far_bound(start, p, d, length, tolerance, cache));
+        }
         if !cache.candidates.contains(&end_closest.triangle) {
             cache.candidates.push(end_closest.triangle); // guards against rounding
         }

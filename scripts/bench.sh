@@ -28,3 +28,14 @@ for object in homogeneous roughconductor macrofacet; do
     seconds=$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.2f", (b - a) / 1e9 }')
     printf '%-15s %7s s    Mitsuba 3.9.1 at 512x512/64 spp: %s\n' "$object" "$seconds" "${mitsuba[$object]}"
 done
+
+# The Mitsuba 3 plugin: the thin gold shell as a macrofacet medium vs the same sphere as
+# Mitsuba's roughconductor, both scalar_rgb, equal spp, one process (where the plugin is built:
+# python3 finds mitsuba 3.9.1 and nanobind; MF_SETUP_MITSUBA=1 scripts/setup.sh installs them).
+if grep -q "^MF_BUILD_MITSUBA_PLUGIN:BOOL=ON" "$build_dir/CMakeCache.txt"; then
+    cmake --build "$build_dir" -j "$(nproc)" --target macrofacet_mitsuba >/dev/null
+    echo "== Mitsuba 3.9.1 with the macrofacet plugin, bench/anchor.xml, ${res}x${res} at ${spp} spp, $(nproc) threads"
+    PYTHONPATH="$build_dir/mitsuba" python3 scripts/bench_mitsuba.py "$res" "$spp"
+else
+    echo "== Mitsuba plugin benchmark skipped: the plugin is not built (MF_SETUP_MITSUBA=1 scripts/setup.sh installs Mitsuba 3.9.1 and nanobind)"
+fi

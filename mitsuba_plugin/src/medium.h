@@ -71,6 +71,10 @@ public:
         const std::string id(props.id());
         const std::string label = id.empty() ? "<medium type=\"macrofacet\">" : "<medium type=\"macrofacet\" id=\"" + id + "\">";
         try {
+            // read by Mitsuba's Medium base class; not a macrofacet parameter (mfrender always
+            // samples emitters), so a file with it would not render in both
+            if (props.has_property("sample_emitters"))
+                throw std::runtime_error("parameter \"sample_emitters\" is not supported (next-event estimation is always used)");
             Shape* mean = nullptr;
             for (const auto& prop : props.objects()) {
                 const std::string name(prop.name());

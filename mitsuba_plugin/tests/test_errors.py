@@ -48,6 +48,7 @@ CASES = [
     ("mean surface flipped mesh", medium(SIGMA + ALPHA, f'<shape type="obj" name="mean_surface"><string name="filename" value="{TORUS}"/>'
                                                         '<boolean name="flip_normals" value="true"/></shape>'), ["mean_surface", "flip_normals"]),
     ("nested phase", medium(SIGMA + ALPHA + '<phase type="hg"/>'), ["<phase>"]),
+    ("Mitsuba's sample_emitters", medium(SIGMA + ALPHA + '<boolean name="sample_emitters" value="false"/>'), ['"sample_emitters"']),
 ]
 
 

@@ -55,3 +55,14 @@ start=$(date +%s%N)
 "$mfrender" scenes/default.xml -o "$out/default.exr" --quiet
 end=$(date +%s%N)
 echo "default scene (480x270, 20 spp, $(nproc) threads): $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", (b - a) / 1e9 }') s wall (target <= 8 s)"
+
+# The Mitsuba 3 plugin: the thin gold shell as a macrofacet medium vs the same sphere as
+# Mitsuba's roughconductor, both scalar_rgb, equal spp, one process (where the plugin is built:
+# python3 finds mitsuba 3.9.1 and nanobind; MF_SETUP_MITSUBA=1 scripts/setup.sh installs them).
+if grep -q "^MF_BUILD_MITSUBA_PLUGIN:BOOL=ON" "$build_dir/CMakeCache.txt"; then
+    cmake --build "$build_dir" -j "$(nproc)" --target macrofacet_mitsuba >/dev/null
+    echo "== Mitsuba 3.9.1 with the macrofacet plugin, bench/anchor.xml, ${res}x${res} at ${spp} spp, $(nproc) threads"
+    PYTHONPATH="$build_dir/mitsuba" python3 scripts/bench_mitsuba.py "$res" "$spp"
+else
+    echo "== Mitsuba plugin benchmark skipped: the plugin is not built (MF_SETUP_MITSUBA=1 scripts/setup.sh installs Mitsuba 3.9.1 and nanobind)"
+fi

@@ -3,7 +3,8 @@
 # the Debian packages of the C/C++ side and the pinned cbindgen. Safe to run repeatedly.
 # Optional extras, only when asked:
 #   MF_SETUP_FUZZ=1     clang-14 + libclang-rt-14-dev (libFuzzer: scripts/fuzz_scene.sh)
-#   MF_SETUP_MITSUBA=1  Mitsuba 3.9.1 from PyPI (the reference of the Mitsuba comparison tests)
+#   MF_SETUP_MITSUBA=1  Mitsuba 3.9.1 and nanobind 2.14.0 (headers) from PyPI: the Mitsuba plugin
+#                       (mitsuba_plugin/) and the Mitsuba comparison tests
 #   MF_SETUP_SLURM=1    slurm-wlm + munge (scripts/slurm_local_test.sh)
 set -euo pipefail
 
@@ -36,7 +37,14 @@ if ! cbindgen --version 2>/dev/null | grep -qx "cbindgen $CBINDGEN_VERSION"; the
     cargo install --locked --quiet cbindgen --version "$CBINDGEN_VERSION"
 fi
 
-if [ "${MF_SETUP_MITSUBA:-0}" = 1 ] && ! python3 -c "import mitsuba, sys; sys.exit(mitsuba.__version__ != '3.9.1')" 2>/dev/null; then
-    echo "setup: installing mitsuba 3.9.1 (pip)" >&2
-    python3 -m pip install --quiet mitsuba==3.9.1
+if [ "${MF_SETUP_MITSUBA:-0}" = 1 ]; then
+    # nanobind provides the nanobind and robin_map headers that Mitsuba's headers include (the
+    # wheel lacks them); 2.14.0 matches Mitsuba 3.9.1's pinned copies
+    for pin in mitsuba==3.9.1 nanobind==2.14.0; do
+        name=${pin%%==*} version=${pin##*==}
+        if ! python3 -c "import $name, sys; sys.exit($name.__version__ != '$version')" 2>/dev/null; then
+            echo "setup: installing $pin (pip)" >&2
+            python3 -m pip install --quiet "$pin"
+        fi
+    done
 fi

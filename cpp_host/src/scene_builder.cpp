@@ -3,7 +3,11 @@
 
 #include <sys/stat.h>
 
+#include <macrofacet.h>
+
+#include <algorithm>
 #include <map>
+#include <set>
 
 #include "image_io.h"
 #include "mean_surface.h"
@@ -107,6 +111,10 @@ private:
     std::map<const SceneObject*, std::shared_ptr<const Texture>> textures_;
     std::map<const SceneObject*, std::shared_ptr<const Medium>> media_;
     std::map<const SceneObject*, std::shared_ptr<const MediumParamBag>> bags_;
+    std::set<const SceneObject*> failed_bags_;
+    /// Macrofacet media with a nested mean surface (add_boundary): the <shape> and the medium.
+    std::map<const MediumParamBag*, std::shared_ptr<SceneObject>> mean_surfaces_;
+    std::map<const MediumParamBag*, std::shared_ptr<const MacrofacetMedium>> boundary_media_;
 
     static Error err(const SceneObject& o, const std::string& msg) { return Error(o.loc, o.describe() + ": " + msg); }
     static Error perr(const SceneObject& o, const std::string& prop, const std::string& msg) {
@@ -308,6 +316,16 @@ private:
         auto it = bags_.find(&o);
         if (it != bags_.end()) return it->second;
         skip_if_broken(o);
+        if (failed_bags_.count(&o)) throw AlreadyReported{};  // reported at its first use
+        try {
+            return build_bag_once(o);
+        } catch (const Error&) {
+            failed_bags_.insert(&o);
+            throw;
+        }
+    }
+
+    std::shared_ptr<const MediumParamBag> build_bag_once(const SceneObject& o) {
         auto bag = std::make_shared<MediumParamBag>();
         bag->type = o.type;
         bag->id = o.id;
@@ -344,7 +362,11 @@ private:
             }
             bag->params.emplace_back(p.name, v);
         }
-        o.check_all_used();  // nested objects are not allowed in the bag
+        if (const Child* ms = o.child_named("shape", "mean_surface")) {
+            if (o.type != "macrofacet") throw Error(ms->loc, o.describe() + ": only a macrofacet medium takes a nested mean surface");
+            mean_surfaces_[bag.get()] = ms->obj;
+        }
+        o.check_all_used();  // other nested objects are not allowed in the bag
         bags_[&o] = bag;
         return bag;
     }
@@ -376,9 +398,9 @@ private:
     }
 
     // ------------------------------------------------------------------ shapes
-    void build_shape(const std::shared_ptr<SceneObject>& op) {
-        const SceneObject& o = *op;
-        skip_if_broken(o);
+    /// The geometry of a <shape> (its type's parameters, to_world, flip_normals); the caller
+    /// adds BSDF, media and emitter.
+    std::shared_ptr<Shape> build_geometry(const SceneObject& o) {
         const std::string& t = o.type;
         Mat4 to_world = o.get_transform("to_world", Mat4());
         if (std::fabs(to_world.det3()) < 1e-30) throw perr(o, "to_world", "is singular");
@@ -438,6 +460,13 @@ private:
         }
         shape->id = o.id;
         shape->loc = o.loc;
+        return shape;
+    }
+
+    void build_shape(const std::shared_ptr<SceneObject>& op) {
+        const SceneObject& o = *op;
+        skip_if_broken(o);
+        std::shared_ptr<Shape> shape = build_geometry(o);
 
         auto bsdfs = o.children_with_tag("bsdf");
         if (bsdfs.size() > 1) throw err(o, "has more than one BSDF");
@@ -474,6 +503,15 @@ private:
             const char* role = k == 0 ? "interior" : "exterior";
             if (report_) report_->macrofacet.push_back({mf_bag[k], shape, role});
         }
+        if (mf_bag[0] && mean_surfaces_.count(mf_bag[0].get()) && !opts_.allow_macrofacet_placeholders) {
+            if (mf_bag[1]) throw Error(mf_bag[1]->loc, o.describe() + ": a macrofacet medium must be the interior of its boundary");
+            if (bsdfs.empty() || !shape->bsdf->is_null())
+                throw err(o, "the boundary of a macrofacet medium needs <bsdf type=\"null\"/> (Mitsuba gives a shape without "
+                             "a BSDF a diffuse one)");
+            if (em) throw Error(ems[0]->loc, o.describe() + ": the boundary of a macrofacet medium cannot be an emitter");
+            add_boundary(o, shape, mf_bag[0]);
+            return;
+        }
         if ((mf_bag[0] || mf_bag[1]) && !opts_.allow_macrofacet_placeholders) {
             // The shape is the mean surface of a macrofacet (or gpis) medium (phase 2): the medium
             // fills f < top (k*sigma, resp. the gpis envelope), and the boundary f = top replaces
@@ -501,6 +539,65 @@ private:
         }
         scene_->add_shape(shape);
         if (em) scene_->add_emitter(em);
+    }
+
+    // ------------------------------------------------------------------ macrofacet boundaries
+    // The form that Mitsuba 3 with the macrofacet plugin reads too (mitsuba_plugin/): the medium
+    // nests its mean surface as <shape name="mean_surface">, and a shape whose interior is the
+    // medium is the boundary through which rays enter it, as in Mitsuba. The boundary must have a
+    // null BSDF and contain the region f < k sigma; mfrender uses it as the medium's Embree
+    // boundary (instead of make_region_boundary), so both renderers see the same geometry.
+
+    void add_boundary(const SceneObject& o, const std::shared_ptr<Shape>& boundary, const std::shared_ptr<const MediumParamBag>& bag) {
+        auto it = boundary_media_.find(bag.get());
+        if (it == boundary_media_.end()) {
+            const SceneObject& ms = *mean_surfaces_.at(bag.get());
+            skip_if_broken(ms);
+            std::shared_ptr<Shape> mean = build_geometry(ms);
+            if (ms.type != "sphere" && ms.get_bool("flip_normals", false))  // as the plugin
+                throw perr(ms, "flip_normals", "is not allowed on a mesh mean surface (its triangles' winding defines the interior)");
+            ms.check_all_used();  // the mean surface is geometry only
+            auto m = create_macrofacet_medium(*bag, MeanSurface::of(*mean));
+            scene_->media.push_back(m);
+            it = boundary_media_.emplace(bag.get(), m).first;
+        }
+        check_boundary(o, *boundary, *it->second);
+        boundary->interior = it->second;
+        scene_->add_shape(boundary);
+    }
+
+    /// Refuses a boundary that does not contain the medium's region: every vertex of a mesh (2048
+    /// points of a sphere) must have f >= k sigma and its box must contain the region's, up to the
+    /// float rounding of the boundary's coordinates (1e-5 of the region's size).
+    static void check_boundary(const SceneObject& o, const Shape& boundary, const MacrofacetMedium& medium) {
+        const double level = medium.shell_top();
+        mf_vec3 lo, hi;
+        if (mf_surface_bounding_box(medium.surface().handle(), &lo, &hi) != MF_OK)
+            throw err(o, "mf_surface_bounding_box failed: " + mf_last_error());
+        const double tol = 1e-5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, level});
+        const Aabb b = boundary.bounds();
+        if (b.lo.x > lo.x - level + tol || b.lo.y > lo.y - level + tol || b.lo.z > lo.z - level + tol ||
+            b.hi.x < hi.x + level - tol || b.hi.y < hi.y + level - tol || b.hi.z < hi.z + level - tol)
+            throw err(o, "does not contain its macrofacet medium's region f < k sigma = " + std::to_string(level) +
+                             ": its box is smaller than the mean surface's grown by k sigma");
+        std::vector<Vec3> points;
+        if (auto* sph = dynamic_cast<const SphereShape*>(&boundary)) {
+            const int n = 2048;  // a Fibonacci sphere
+            for (int i = 0; i < n; ++i) {
+                float z = 1 - (2 * i + 1) / float(n), r = std::sqrt(std::max(0.0f, 1 - z * z)), phi = 2.39996323f * i;
+                points.push_back(sph->center() + Vec3(r * std::cos(phi), r * std::sin(phi), z) * sph->radius());
+            }
+        } else if (auto* mesh = dynamic_cast<const MeshShape*>(&boundary)) {
+            points = mesh->mesh().p;
+        }
+        for (const Vec3& p : points) {
+            double f = medium.surface().eval(p, nullptr, nullptr);
+            if (f < level - tol)
+                throw err(o, "does not contain its macrofacet medium's region f < k sigma = " + std::to_string(level) +
+                                 ": at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) +
+                                 ") f = " + std::to_string(f) + " (for a sphere of radius r: a boundary of radius >= r + k "
+                                 "sigma; for a mesh: python3 -m macrofacet_mitsuba enclosure)");
+        }
     }
 
     // ------------------------------------------------------------------ emitters
@@ -721,7 +818,10 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               macrofacet (as the interior of its mean-surface shape; parameters as in the
               C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
               lengthscale*, micro_bsdf, material | eta,k, specular_reflectance,
-              reflectance, vndf_sampling, mixture_ratio)
+              reflectance, vndf_sampling, mixture_ratio); or in the form that Mitsuba 3
+              with the macrofacet plugin also reads: the medium nests its mean surface
+              as <shape name="mean_surface"> (sphere or mesh) and the shapes whose
+              interior it is are boundaries (<bsdf type="null"/>, containing f < k sigma)
               gpis (realization-based ground truth; as the interior of its mean-surface
               shape; the macrofacet names that apply: sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,

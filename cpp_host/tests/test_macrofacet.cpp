@@ -25,6 +25,8 @@
 //    noise, modelled as var = k·(a + b) with k fitted over the mask).
 //  * unbiased_convergence: the same macrofacet and homogeneous scenes at 32 spp / seed 1 and
 //    128 spp / seed 2 agree (mean difference within 4.5 combined SE).
+//  * boundary_form: the form Mitsuba with the plugin reads (nested mean surface, null-BSDF
+//    boundary) renders as the mean-surface form, with a tight and a loose boundary.
 //  * determinism: bit-identical EXR for the same seed (1 and 2 threads).
 #include <macrofacet.h>
 
@@ -473,6 +475,44 @@ TEST_CASE(unbiased_convergence) {
                                                       std::to_string(m) + " se " + std::to_string(se));
         std::printf("  %s half: mean %.5f, 32 spp - 128 spp = %+.5f (%.2f se)\n", half ? "homogeneous" : "macrofacet", sa / n, m,
                     m / se);
+    }
+}
+
+// The boundary form (mitsuba_plugin/; Mitsuba with the plugin reads it too): the medium nests
+// its mean surface and a null-BSDF shape is the boundary rays enter through. With the tight
+// boundary (radius r + k sigma) and a loose one (r + 3 k sigma) the image equals the
+// mean-surface form's (mfrender's own boundary) within 4.5 SE of the pixel-wise differences.
+TEST_CASE(boundary_form) {
+    const std::string params = R"(<float name="sigma" value="0.04"/><string name="distribution" value="gpss"/>)"
+                               R"(<float name="alpha" value="0.5"/><float name="alpha_z" value="0.25"/><string name="material" value="Cu"/>)";
+    const std::string lights = R"(<shape type="rectangle"><transform name="to_world"><scale value="0.5"/><lookat origin="0, 1.5, 2" target="0, 0, 0" up="0, 0, 1"/></transform>
+        <emitter type="area"><rgb name="radiance" value="5"/></emitter></shape><emitter type="constant"><rgb name="radiance" value="0.3"/></emitter>)";
+    auto scene = [&](const std::string& sphere) {
+        return "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(3.0f, 40.0f, 24, 24, 64) + sphere + lights + "</scene>";
+    };
+    write_file(work("form_mean.xml"), scene(medium_xml("mf", params) + R"(<shape type="sphere"><ref name="interior" id="mf"/></shape>)"));
+    CHECK(run({work("form_mean.xml"), "-o", work("form_mean.exr"), "--quiet", "--seed", "1"}) == 0);
+    const Image ref = read_exr(work("form_mean.exr"));
+    for (const char* radius : {"1.12", "1.36"}) {
+        const std::string name = std::string("form_boundary_") + radius;
+        write_file(work(name + ".xml"), scene(medium_xml("mf", params + R"(<shape type="sphere" name="mean_surface"/>)") +
+                                              R"(<shape type="sphere"><float name="radius" value=")" + radius +
+                                              R"("/><bsdf type="null"/><ref name="interior" id="mf"/></shape>)"));
+        CHECK(run({work(name + ".xml"), "-o", work(name + ".exr"), "--quiet", "--seed", "2"}) == 0);
+        const Image b = read_exr(work(name + ".exr"));
+        double n = double(ref.rgb.size()), m = 0, v = 0, mean = 0;
+        for (size_t i = 0; i < ref.rgb.size(); ++i) {
+            m += (double(b.rgb[i]) - ref.rgb[i]) / n;
+            mean += ref.rgb[i] / n;
+        }
+        for (size_t i = 0; i < ref.rgb.size(); ++i) {
+            double d = double(b.rgb[i]) - ref.rgb[i] - m;
+            v += d * d / (n - 1);
+        }
+        const double se = std::sqrt(v / n);
+        CHECK_MSG(std::fabs(m) < 4.5 * se + 1e-4, name + ": boundary form - mean-surface form = " + std::to_string(m) + " (se " +
+                                                      std::to_string(se) + ")");
+        std::printf("  boundary radius %s: mean %.5f, boundary form - mean-surface form = %+.5f (%.2f se)\n", radius, mean, m, m / se);
     }
 }
 

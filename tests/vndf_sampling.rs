@@ -5,7 +5,7 @@ mod common;
 
 use common::spherical;
 use glam::DVec3;
-use macrofacet::ndf::{Beckmann, BeckmannUniformMixture, Ggx, Gpss, MicrofacetDistribution, Ndf};
+use macrofacet::ndf::{Beckmann, BeckmannUniformMixture, Ggx, Gpss, GpssMatrix, MicrofacetDistribution, Ndf};
 use macrofacet::stats::{sidak_alpha, Pcg32, SphereChi2};
 
 /// Incident directions `wi` (pointing away): normal, 45°, grazing from above, and from below
@@ -31,6 +31,12 @@ fn distributions() -> Vec<(String, Ndf)> {
     // equal-area bins can integrate; they are covered by the quadrature tests in ndf.rs.)
     for &(ax, ay, az) in &[(0.2, 0.2, 0.05), (0.2, 0.2, 0.5), (0.5, 0.15, 1.0), (1.0, 1.0, 1.0), (1.0, 1.0, 3.0), (0.6, 1.2, 0.0)] {
         v.push((format!("gpss({ax},{ay},{az})"), Ndf::Gpss(Gpss::new(ax, ay, az).unwrap())));
+    }
+    // Full local anisotropies whose axes are tilted away from the normal (seeds/004 Eq. 25).
+    for ((a, b, c), tilt, turn) in [((0.3f64, 0.6f64, 0.4f64), 0.5f64, 0.3f64), ((1.0, 0.5, 0.3), 1.1, 2.0)] {
+        let r = glam::DMat3::from_rotation_z(turn) * glam::DMat3::from_rotation_x(tilt);
+        let q = r * glam::DMat3::from_diagonal(DVec3::new(a * a, b * b, c * c)) * r.transpose();
+        v.push((format!("gpss_matrix({a},{b},{c}; {tilt}, {turn})"), Ndf::GpssMatrix(GpssMatrix::new(q, "Q").unwrap())));
     }
     v
 }

@@ -23,7 +23,7 @@ impl Beckmann {
     }
 
     pub(super) fn gradient(&self) -> GaussianGradient {
-        GaussianGradient { alpha: DVec3::new(self.alpha_u, self.alpha_v, 0.0) }
+        GaussianGradient::diagonal(DVec3::new(self.alpha_u, self.alpha_v, 0.0))
     }
 }
 

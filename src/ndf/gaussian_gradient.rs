@@ -11,7 +11,7 @@
 //! vNDF, which seeds/000 leaves as future work (it uses the mixture of Eq. 40).
 
 use crate::special::{erfc, erfcx, normal_cdf, normal_pdf};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
 const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3;
@@ -21,15 +21,49 @@ const MIN_VISIBLE_C: f64 = -38.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct GaussianGradient {
-    /// Standard deviations of the gradient components divided by `1/sqrt(2)`: the roughnesses.
-    pub alpha: DVec3,
+    /// The spread `L` of `g = e_z + L z`.
+    pub spread: Spread,
+}
+
+/// `L` with `Cov(g) = L Lᵀ`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Spread {
+    /// Frame-aligned kernels: `L = diag(alpha)/√2` with the roughnesses `alpha` (seeds/000 Eq. 4).
+    Diagonal(DVec3),
+    /// A full local anisotropy (seeds/004 Eqs. 25–26): `L = K/√2` with `K Kᵀ = Q`, the "α²
+    /// matrix" `Q = 2 Cov(g)` (lower-triangular `K`).
+    Matrix(DMat3),
 }
 
 impl GaussianGradient {
-    /// `s(w) = sqrt(alpha_x² w_x² + alpha_y² w_y² + alpha_z² w_z²)`, the denominator of `a` in
-    /// Eq. 32; `sqrt(2)` times the standard deviation of `w·g`.
+    pub fn diagonal(alpha: DVec3) -> Self {
+        GaussianGradient { spread: Spread::Diagonal(alpha) }
+    }
+
+    /// `Lᵀ w`: `w·g = w_z + (Lᵀ w)·z`.
+    fn spread_t(&self, w: DVec3) -> DVec3 {
+        match self.spread {
+            Spread::Diagonal(alpha) => alpha * FRAC_1_SQRT_2 * w,
+            Spread::Matrix(k) => k.transpose() * w * FRAC_1_SQRT_2,
+        }
+    }
+
+    /// `L z`.
+    fn spread(&self, z: DVec3) -> DVec3 {
+        match self.spread {
+            Spread::Diagonal(alpha) => alpha * FRAC_1_SQRT_2 * z,
+            Spread::Matrix(k) => k * z * FRAC_1_SQRT_2,
+        }
+    }
+
+    /// `s(w) = sqrt(wᵀ Q w)` (`sqrt(alpha_x² w_x² + alpha_y² w_y² + alpha_z² w_z²)` for a
+    /// frame-aligned kernel), the denominator of `a` in seeds/000 Eq. 32; `sqrt(2)` times the
+    /// standard deviation of `w·g`.
     fn s(&self, w: DVec3) -> f64 {
-        (self.alpha * w).length()
+        match self.spread {
+            Spread::Diagonal(alpha) => (alpha * w).length(),
+            Spread::Matrix(k) => (k.transpose() * w).length(),
+        }
     }
 
     /// `E[max(0, w·g)] = s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (Eq. 32's `a`). Written
@@ -51,9 +85,8 @@ impl GaussianGradient {
     /// Exact sample of the visible normals from `wi`. `u[0]` drives the 1-D density along `L wi`,
     /// `u[1], u[2]` the orthogonal standard normal pair (Box–Muller).
     pub fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
-        // Whitened coordinates: g = e_z + L z, z ~ N(0, I), L = diag(alpha)/sqrt(2).
-        let l = self.alpha * FRAC_1_SQRT_2;
-        let v = l * wi; // wi·g = wi.z + v·z
+        // Whitened coordinates: g = e_z + L z, z ~ N(0, I).
+        let v = self.spread_t(wi); // wi·g = wi.z + v·z
         let v_len = v.length();
         let z = if v_len == 0.0 {
             // wi·g is the constant wi.z: every gradient is equally visible (or none is).
@@ -74,7 +107,7 @@ impl GaussianGradient {
             let (n2, n3) = box_muller(u[1], u[2]);
             e1 * x + e2 * n2 + e3 * n3
         };
-        let g = DVec3::Z + l * z;
+        let g = DVec3::Z + self.spread(z);
         let m = g.try_normalize()?;
         // Rounding can leave a sample a hair behind the visibility plane at grazing angles.
         (wi.dot(m) > 0.0).then_some(m)

@@ -29,7 +29,7 @@ impl Gpss {
     }
 
     fn gradient(&self) -> GaussianGradient {
-        GaussianGradient { alpha: DVec3::new(self.alpha_x, self.alpha_y, self.alpha_z) }
+        GaussianGradient::diagonal(DVec3::new(self.alpha_x, self.alpha_y, self.alpha_z))
     }
 
     /// The height-field limit with the same in-plane roughness (used by the Eq. 40 mixture).

@@ -16,11 +16,13 @@ mod beckmann;
 mod gaussian_gradient;
 mod ggx;
 mod gpss;
+mod gpss_matrix;
 mod mixture;
 
 pub use beckmann::Beckmann;
 pub use ggx::Ggx;
 pub use gpss::Gpss;
+pub use gpss_matrix::GpssMatrix;
 pub use mixture::BeckmannUniformMixture;
 
 use glam::DVec3;
@@ -65,6 +67,8 @@ pub enum Ndf {
     Beckmann(Beckmann),
     Ggx(Ggx),
     Gpss(Gpss),
+    /// A full local anisotropy (spatially varying media; built per query, not by name).
+    GpssMatrix(GpssMatrix),
 }
 
 impl MicrofacetDistribution for Ndf {
@@ -73,6 +77,7 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.d(m),
             Ndf::Ggx(x) => x.d(m),
             Ndf::Gpss(x) => x.d(m),
+            Ndf::GpssMatrix(x) => x.d(m),
         }
     }
     fn projected_area(&self, w: DVec3) -> f64 {
@@ -80,6 +85,7 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.projected_area(w),
             Ndf::Ggx(x) => x.projected_area(w),
             Ndf::Gpss(x) => x.projected_area(w),
+            Ndf::GpssMatrix(x) => x.projected_area(w),
         }
     }
     fn lambda(&self, w: DVec3) -> f64 {
@@ -87,6 +93,7 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.lambda(w),
             Ndf::Ggx(x) => x.lambda(w),
             Ndf::Gpss(x) => x.lambda(w),
+            Ndf::GpssMatrix(x) => x.lambda(w),
         }
     }
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
@@ -94,6 +101,7 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.sample_visible(wi, u),
             Ndf::Ggx(x) => x.sample_visible(wi, u),
             Ndf::Gpss(x) => x.sample_visible(wi, u),
+            Ndf::GpssMatrix(x) => x.sample_visible(wi, u),
         }
     }
 }
@@ -127,6 +135,12 @@ impl Ndf {
                     Ndf::Gpss(Gpss { alpha_x: lo, alpha_y: lo, alpha_z: g.alpha_z }),
                 )
             }
+            Ndf::GpssMatrix(g) => {
+                // s(w)² = wᵀ Q w lies between Q's eigenvalue bounds (times |w|² = 1).
+                let (lo, hi) = g.alpha_squared_range();
+                let iso = |a2: f64| Ndf::Gpss(Gpss { alpha_x: a2.sqrt(), alpha_y: a2.sqrt(), alpha_z: a2.sqrt() });
+                (iso(hi), iso(lo))
+            }
         }
     }
 
@@ -141,6 +155,8 @@ impl Ndf {
             Ndf::Beckmann(b) => gaussian(DVec3::new(b.alpha_u, b.alpha_v, 0.0)),
             Ndf::Ggx(g) => 0.5 * (1.0 + g.alpha_u.max(g.alpha_v).max(1.0)),
             Ndf::Gpss(g) => gaussian(DVec3::new(g.alpha_x, g.alpha_y, g.alpha_z)),
+            // E|g|² = 1 + tr(Cov g) = 1 + tr(Q)/2.
+            Ndf::GpssMatrix(g) => (1.0 + 0.5 * (g.q().x_axis.x + g.q().y_axis.y + g.q().z_axis.z)).sqrt(),
         }
     }
 
@@ -150,6 +166,7 @@ impl Ndf {
             Ndf::Beckmann(b) => b.alpha_u == b.alpha_v,
             Ndf::Ggx(g) => g.alpha_u == g.alpha_v,
             Ndf::Gpss(g) => g.alpha_x == g.alpha_y,
+            Ndf::GpssMatrix(_) => false,
         }
     }
 }

@@ -106,7 +106,7 @@ fn bench_tracking<S: MeanSurface>(label: &str, medium: &macrofacet::MacrofacetMe
     let mut collisions = Vec::new();
     let start = Instant::now();
     for (i, &(o, d)) in rays.iter().enumerate() {
-        if let TrackedFlight::Scatter { t, point } = tracker.sample_free_flight(o, d, f64::INFINITY, &mut Pcg32::new(i as u64, 1), &mut flights).unwrap() {
+        if let TrackedFlight::Scatter { t, point, .. } = tracker.sample_free_flight(o, d, f64::INFINITY, &mut Pcg32::new(i as u64, 1), &mut flights).unwrap() {
             collisions.push((o + t * d, point.normal));
         }
     }

@@ -26,6 +26,26 @@
 #define MF_VERSION_PATCH 0
 
 /**
+ * [`mf_local_params::set`] / [`mf_param_bounds::set`]: `sigma` is given.
+ */
+#define MF_LOCAL_SIGMA 1
+
+/**
+ * `alpha` is given (`alpha_u`, `alpha_v`, `alpha_z` in the local frame).
+ */
+#define MF_LOCAL_ALPHA 2
+
+/**
+ * `anisotropy` is given (gpss media only; bounds of it go in `alpha_lo`/`alpha_hi`).
+ */
+#define MF_LOCAL_ANISOTROPY 4
+
+/**
+ * `reflectance_scale` is given.
+ */
+#define MF_LOCAL_REFLECTANCE_SCALE 8
+
+/**
  * [`mf_gpis_start::kind`]: the segment starts in free space (camera or light ray): the origin
  * value is drawn from the prior conditioned on `f > 0`.
  */
@@ -113,6 +133,12 @@ typedef enum mf_status {
 typedef struct mf_enclosure mf_enclosure;
 
 /**
+ * A field of local parameters. Immutable and safe to share between threads (its callbacks must
+ * then be thread-safe, or be given per-thread `user_data`).
+ */
+typedef struct mf_field mf_field;
+
+/**
  * An immutable GPIS configuration; safe to share between threads.
  */
 typedef struct mf_gpis mf_gpis;
@@ -142,6 +168,153 @@ typedef struct mf_vec3 {
   double y;
   double z;
 } mf_vec3;
+
+/**
+ * The mean surface at a point.
+ */
+typedef struct mf_surface_point {
+  /**
+   * Signed distance to the mean surface (scene units; `> 0` outside).
+   */
+  double f;
+  /**
+   * Unit normal of the local frame.
+   */
+  struct mf_vec3 normal;
+  /**
+   * Direction of `alpha_u` (made orthogonal to `normal` by the library).
+   */
+  struct mf_vec3 tangent;
+} mf_surface_point;
+
+/**
+ * Linear RGB.
+ */
+typedef struct mf_rgb {
+  double r;
+  double g;
+  double b;
+} mf_rgb;
+
+/**
+ * The medium's parameters at one point; fields whose bit is not in `set` keep the medium's
+ * value.
+ */
+typedef struct mf_local_params {
+  /**
+   * Bits `MF_LOCAL_*`.
+   */
+  uint32_t set;
+  /**
+   * Standard deviation of the heights (scene units, `> 0`).
+   */
+  double sigma;
+  /**
+   * Roughness along the local tangent, bitangent and normal (`x = alpha_u`, `y = alpha_v`,
+   * `z = alpha_z`); Beckmann and GGX read `x`, `y`. `alpha_u, alpha_v > 0`, `alpha_z >= 0`.
+   */
+  struct mf_vec3 alpha;
+  /**
+   * The kernel's local anisotropy `Σ` of seeds/004 Eq. 25 in world space, a symmetric
+   * positive-definite matrix with the lengthscales² on its axes, as `xx, yy, zz, xy, xz, yz`
+   * (Mitsuba's SGGX order); the roughness matrix is `2 σ² Σ⁻¹` in the local frame.
+   */
+  double anisotropy[6];
+  /**
+   * Multiplies the flakes' reflectance per channel (the product must stay within `[0, 1]`).
+   */
+  struct mf_rgb reflectance_scale;
+} mf_local_params;
+
+/**
+ * The host's parameters at `p`, where the mean surface is `*point`: writes `*out` and returns
+ * 0, or a non-zero code on failure (the tracking call then fails with `MF_ERROR_CALLBACK`).
+ */
+typedef int32_t (*mf_field_at_fn)(void *user_data,
+                                  struct mf_vec3 p,
+                                  const struct mf_surface_point *point,
+                                  struct mf_local_params *out);
+
+/**
+ * Bounds of the parameters along a segment (for majorants). With `MF_LOCAL_SIGMA`:
+ * `sigma_lo <= σ <= sigma_hi`; with `MF_LOCAL_ALPHA` (also for `MF_LOCAL_ANISOTROPY`): every
+ * roughness the NDF sees — each `alpha` component, or `√λ` over the eigenvalues `λ` of
+ * `2σ²Σ⁻¹` — within `[alpha_lo, alpha_hi]`. A field must bound every parameter it varies.
+ */
+typedef struct mf_param_bounds {
+  uint32_t set;
+  double sigma_lo;
+  double sigma_hi;
+  double alpha_lo;
+  double alpha_hi;
+} mf_param_bounds;
+
+/**
+ * The host's bounds along `p + s d`, `s ∈ [0, length]`: writes `*out` and returns 0, or a
+ * non-zero code on failure.
+ */
+typedef int32_t (*mf_field_bounds_fn)(void *user_data,
+                                      struct mf_vec3 p,
+                                      struct mf_vec3 d,
+                                      double length,
+                                      struct mf_param_bounds *out);
+
+/**
+ * A field implemented by the host. Both callbacks get the `user_data` of the tracking call.
+ */
+typedef struct mf_field_callbacks {
+  /**
+   * Required.
+   */
+  mf_field_at_fn at;
+  /**
+   * Required.
+   */
+  mf_field_bounds_fn bounds;
+  /**
+   * The largest `σ` anywhere (the region's top face is at `shell_extent × sigma_max`); 0 when
+   * `σ` does not vary.
+   */
+  double sigma_max;
+} mf_field_callbacks;
+
+/**
+ * The local frame of an event: `normal` = gradient of the mean SDF (need not be normalised,
+ * must be non-zero), `tangent` = direction of `alpha_u` (projected orthogonal to the normal; any
+ * vector, even zero, for isotropic roughness).
+ */
+typedef struct mf_frame {
+  struct mf_vec3 normal;
+  struct mf_vec3 tangent;
+} mf_frame;
+
+/**
+ * A sampled scattering direction. `valid` is false when nothing can be sampled (no flake visible
+ * from `wi`); the other fields are then zero.
+ */
+typedef struct mf_phase_sample_result {
+  /**
+   * New propagation direction, world space, pointing away from the event.
+   */
+  struct mf_vec3 wo;
+  /**
+   * `p(wi, wo) / pdf`: the throughput factor (includes the flakes' reflectance).
+   */
+  struct mf_rgb weight;
+  /**
+   * Solid-angle density of `wo`.
+   */
+  double pdf;
+  bool valid;
+} mf_phase_sample_result;
+
+/**
+ * The phase function's value and sampling density for one pair of directions.
+ */
+typedef struct mf_phase_value {
+  struct mf_rgb value;
+  double pdf;
+} mf_phase_value;
 
 /**
  * The mean signed distance and its gradient at a point, as the host's callback returns them.
@@ -181,45 +354,6 @@ typedef struct mf_gpis_hit {
 } mf_gpis_hit;
 
 /**
- * Linear RGB.
- */
-typedef struct mf_rgb {
-  double r;
-  double g;
-  double b;
-} mf_rgb;
-
-/**
- * A sampled scattering direction. `valid` is false when nothing can be sampled (no flake visible
- * from `wi`); the other fields are then zero.
- */
-typedef struct mf_phase_sample_result {
-  /**
-   * New propagation direction, world space, pointing away from the event.
-   */
-  struct mf_vec3 wo;
-  /**
-   * `p(wi, wo) / pdf`: the throughput factor (includes the flakes' reflectance).
-   */
-  struct mf_rgb weight;
-  /**
-   * Solid-angle density of `wo`.
-   */
-  double pdf;
-  bool valid;
-} mf_phase_sample_result;
-
-/**
- * The local frame of an event: `normal` = gradient of the mean SDF (need not be normalised,
- * must be non-zero), `tangent` = direction of `alpha_u` (projected orthogonal to the normal; any
- * vector, even zero, for isotropic roughness).
- */
-typedef struct mf_frame {
-  struct mf_vec3 normal;
-  struct mf_vec3 tangent;
-} mf_frame;
-
-/**
  * Result of free-flight sampling: `scattered` is true when a collision happened at distance `t`
  * (then `0 <= t <= t_max`); false when the ray passed the whole segment (`t` is then `t_max`).
  */
@@ -227,14 +361,6 @@ typedef struct mf_free_flight {
   bool scattered;
   double t;
 } mf_free_flight;
-
-/**
- * The phase function's value and sampling density for one pair of directions.
- */
-typedef struct mf_phase_value {
-  struct mf_rgb value;
-  double pdf;
-} mf_phase_value;
 
 /**
  * One free-flight or transmittance query of a batch: the segment starts where the signed
@@ -266,24 +392,6 @@ typedef struct mf_phase_sample_query {
   struct mf_vec3 wi;
   double u[MF_PHASE_SAMPLE_DIMENSIONS];
 } mf_phase_sample_query;
-
-/**
- * The mean surface at a point.
- */
-typedef struct mf_surface_point {
-  /**
-   * Signed distance to the mean surface (scene units; `> 0` outside).
-   */
-  double f;
-  /**
-   * Unit normal of the local frame.
-   */
-  struct mf_vec3 normal;
-  /**
-   * Direction of `alpha_u` (made orthogonal to `normal` by the library).
-   */
-  struct mf_vec3 tangent;
-} mf_surface_point;
 
 /**
  * The host's mean surface at `p` (world space): writes `*out` and returns 0, or returns any
@@ -408,6 +516,10 @@ typedef struct mf_collision {
   struct mf_vec3 p;
   double f;
   struct mf_frame frame;
+  /**
+   * The field's parameters at the collision (`set = 0` without a field or when passing).
+   */
+  struct mf_local_params local;
   struct mf_track_stats stats;
 } mf_collision;
 
@@ -449,6 +561,52 @@ const char *mf_status_str(int32_t status);
  * `buf` must be valid for `len` bytes of writes.
  */
 enum mf_status mf_last_error_message(char *buf, size_t len, size_t *out_len);
+
+/**
+ * Creates a host-implemented field (see [`mf_field_callbacks`]).
+ *
+ * # Safety
+ * `callbacks` must be NULL or valid; `out_field` NULL or valid for writes.
+ */
+enum mf_status mf_field_new_callbacks(const struct mf_field_callbacks *callbacks,
+                                      struct mf_field **out_field);
+
+/**
+ * Releases a field; NULL is a no-op.
+ *
+ * # Safety
+ * `field` must be NULL or a pointer from [`mf_field_new_callbacks`], not yet freed and not in
+ * use by another thread.
+ */
+void mf_field_free(struct mf_field *field);
+
+/**
+ * [`super::medium::mf_phase_sample`] at an event whose local parameters are `*local` (as a
+ * collision reported them; NULL: the medium's own).
+ *
+ * # Safety
+ * Pointers must be NULL or valid; `u` must hold `MF_PHASE_SAMPLE_DIMENSIONS` doubles.
+ */
+enum mf_status mf_phase_sample_local(const struct mf_medium *medium,
+                                     const struct mf_local_params *local,
+                                     const struct mf_frame *frame_,
+                                     struct mf_vec3 wi,
+                                     const double *u,
+                                     struct mf_phase_sample_result *out_sample);
+
+/**
+ * [`super::medium::mf_phase_eval_pdf`] at an event whose local parameters are `*local` (NULL:
+ * the medium's own).
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_phase_eval_pdf_local(const struct mf_medium *medium,
+                                       const struct mf_local_params *local,
+                                       const struct mf_frame *frame_,
+                                       struct mf_vec3 wi,
+                                       struct mf_vec3 wo,
+                                       struct mf_phase_value *out_value);
 
 /**
  * Creates a GPIS from named parameters: the macrofacet medium's names (`sigma`, `variance`,
@@ -842,14 +1000,18 @@ void mf_enclosure_free(struct mf_enclosure *enclosure);
  * to the next real collision, with its local frame (for `mf_phase_*`). Delta tracking against
  * majorants built from the planar closed forms and the surface's segment bounds: exact (every
  * tentative collision real) for a planar surface, unbiased for any surface whose bounds hold.
- * `user_data` is passed to the surface's callbacks. Errors: invalid arguments, a callback's
- * failure or invalid answer (NaN, non-unit normal, inconsistent bound) — reported at once.
+ * `field` (NULL for a stationary medium) gives spatially varying parameters; the collision then
+ * reports them in `local`, for `mf_phase_sample_local` / `mf_phase_eval_pdf_local`.
+ * `user_data` is passed to the surface's and the field's callbacks. Errors: invalid arguments, a
+ * callback's failure or invalid answer (NaN, non-unit normal, inconsistent bound) — reported at
+ * once.
  *
  * # Safety
  * Pointers must be NULL or valid; the callbacks must be safe to call with `user_data`.
  */
 enum mf_status mf_track_free_flight(const struct mf_medium *medium,
                                     const struct mf_surface *surface,
+                                    const struct mf_field *field,
                                     void *user_data,
                                     const struct mf_track_query *query,
                                     struct mf_collision *out_collision);
@@ -863,6 +1025,7 @@ enum mf_status mf_track_free_flight(const struct mf_medium *medium,
  */
 enum mf_status mf_track_transmittance(const struct mf_medium *medium,
                                       const struct mf_surface *surface,
+                                      const struct mf_field *field,
                                       void *user_data,
                                       const struct mf_track_query *query,
                                       struct mf_transmittance *out_transmittance);
@@ -875,6 +1038,7 @@ enum mf_status mf_track_transmittance(const struct mf_medium *medium,
  */
 enum mf_status mf_track_free_flight_batch(const struct mf_medium *medium,
                                           const struct mf_surface *surface,
+                                          const struct mf_field *field,
                                           void *user_data,
                                           const struct mf_track_query *queries,
                                           size_t count,
@@ -888,6 +1052,7 @@ enum mf_status mf_track_free_flight_batch(const struct mf_medium *medium,
  */
 enum mf_status mf_track_transmittance_batch(const struct mf_medium *medium,
                                             const struct mf_surface *surface,
+                                            const struct mf_field *field,
                                             void *user_data,
                                             const struct mf_track_query *queries,
                                             size_t count,

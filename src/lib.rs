@@ -24,6 +24,7 @@
 
 pub mod error;
 pub mod ffi;
+pub mod field;
 pub mod frame;
 pub mod fresnel;
 pub mod gpis;

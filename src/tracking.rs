@@ -26,6 +26,7 @@
 //! caller seeds per call.
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::field::{Constant, LocalParams, MediumField, ParamBounds};
 use crate::frame::Frame;
 use crate::height::HeightProfile;
 use crate::medium::MacrofacetMedium;
@@ -66,7 +67,7 @@ impl TrackStats {
 pub enum TrackedFlight {
     /// A real collision at distance `t`, where the surface is `point` (its frame is the local
     /// frame of the phase function there).
-    Scatter { t: f64, point: SurfacePoint },
+    Scatter { t: f64, point: SurfacePoint, local: LocalParams },
     /// No collision in `[0, t_max]`.
     Pass,
 }
@@ -141,13 +142,20 @@ impl ProjectedAreaBounds {
 /// `lipschitz × width / 2` loss, a few percent, for half the evaluations.
 const NARROW_RANGE: f64 = 0.05;
 
-/// Tracking of one medium around one mean surface.
-pub struct Tracker<'a, S: MeanSurface> {
+/// Tracking of one medium around one mean surface, its parameters constant or given per point by
+/// a field ([`crate::field`]).
+pub struct Tracker<'a, S: MeanSurface, F: MediumField = Constant> {
     medium: &'a MacrofacetMedium,
     surface: &'a S,
+    field: &'a F,
     area: ProjectedAreaBounds,
     isotropic: bool,
+    /// The heights of the whole region: the medium's, or the field's largest `σ`.
+    region: HeightProfile,
 }
+
+/// The field of a stationary medium.
+const CONSTANT: Constant = Constant;
 
 /// What the previous segment of a ray says about the next one's length.
 #[derive(Clone, Copy, Debug)]
@@ -163,23 +171,58 @@ enum Previous {
 struct Segment {
     t: f64,
     bound: SegmentBound,
+    /// The density shape of the majorant and control (the largest `σ` on the segment).
+    shape: HeightProfile,
     s_up: f64,
     s_lo: f64,
+    /// The field's bounds on the segment (default for a stationary medium).
+    params: ParamBounds,
     shortened: bool,
 }
 
 impl<'a, S: MeanSurface> Tracker<'a, S> {
     pub fn new(medium: &'a MacrofacetMedium, surface: &'a S) -> Self {
-        Tracker { medium, surface, area: ProjectedAreaBounds::new(&medium.phase.ndf), isotropic: medium.phase.ndf.is_isotropic() }
+        Tracker::with_field(medium, surface, &CONSTANT)
+    }
+}
+
+impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
+    /// A medium whose parameters `field` gives per point (`σ_max` must bound its `σ`).
+    pub fn with_field(medium: &'a MacrofacetMedium, surface: &'a S, field: &'a F) -> Self {
+        let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
+        Tracker { medium, surface, field, area: ProjectedAreaBounds::new(&medium.phase.ndf), isotropic: medium.phase.ndf.is_isotropic(), region }
     }
 
     fn height(&self) -> &HeightProfile {
-        &self.medium.height
+        &self.region
     }
 
-    /// `σ_t` at a surface point for propagation direction `d` (world space).
+    /// The medium at a point: the field's local parameters (none for a stationary medium).
+    fn local(&self, p: DVec3, point: &SurfacePoint) -> Result<LocalParams> {
+        if !self.field.varies() {
+            return Ok(LocalParams::default());
+        }
+        let local = self.field.at(p, point)?;
+        local.validate("the medium's field")?;
+        Ok(local)
+    }
+
+    /// `σ_t` at `p`, where the surface is `point`, for propagation direction `d` (world space),
+    /// with the field's parameters there (returned too).
+    pub fn sigma_t_at(&self, p: DVec3, point: &SurfacePoint, d: DVec3) -> Result<(f64, LocalParams)> {
+        let local = self.local(p, point)?;
+        if local == LocalParams::default() {
+            return Ok((self.sigma_t(point, d), local));
+        }
+        let frame = Frame::from_normal_tangent(point.normal, point.tangent)?;
+        let medium = self.medium.localized(&local, &frame)?;
+        Ok((medium.sigma_t(point.f, frame.to_local(d)), local))
+    }
+
+    /// `σ_t` of the medium's own (constant) parameters at a surface point for propagation
+    /// direction `d` (world space).
     pub fn sigma_t(&self, point: &SurfacePoint, d: DVec3) -> f64 {
-        let rho = self.height().density(point.f);
+        let rho = self.medium.height.density(point.f);
         if rho == 0.0 {
             return 0.0;
         }
@@ -302,20 +345,34 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
                 length = 0.5 * bound.length;
                 continue;
             }
+            // The field's bounds: the majorant's density shape takes the largest σ, times the
+            // factor that covers smaller ones; the projected area the largest roughness.
+            let params = if self.field.varies() {
+                let b = self.field.bounds(p, d, bound.length)?;
+                b.validate("the medium's field")?;
+                b
+            } else {
+                ParamBounds::default()
+            };
+            let shape = HeightProfile { sigma: params.sigma.map_or(self.medium.height.sigma, |s| s[1]), ..self.medium.height };
+            let s_up = match params.alpha {
+                Some([_, hi]) => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi)).upper(bound.cos),
+                None => self.area.upper(bound.cos),
+            } * params.density_factor();
             // The control's S_lo is only needed by transmittance; it sets it.
-            return Ok(Segment { t, bound, s_up: self.area.upper(bound.cos), s_lo: 0.0, shortened: shortenings > 0 });
+            return Ok(Segment { t, bound, shape, s_up, s_lo: 0.0, params, shortened: shortenings > 0 });
         }
     }
 
     /// True when the segment's majorant is zero throughout: it lies above the shell.
     fn is_empty(&self, seg: &Segment) -> bool {
-        seg.s_up == 0.0 || seg.bound.f_lo[0].min(seg.bound.f_lo[1]) > self.height().top()
+        seg.s_up == 0.0 || seg.bound.f_lo[0].min(seg.bound.f_lo[1]) > seg.shape.top()
     }
 
     /// The majorant `μ(s)` of a segment at `s`.
     fn majorant(&self, seg: &Segment, s: f64) -> f64 {
         let (f0, slope) = seg.bound.lower_line();
-        seg.s_up * self.height().density(f0 + slope * s)
+        seg.s_up * seg.shape.density(f0 + slope * s)
     }
 
     /// The control `μ_c(s) <= σ_t` of a segment at `s` (zero without an upper bound of `f`).
@@ -324,7 +381,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
         if seg.s_lo == 0.0 {
             return 0.0;
         }
-        seg.s_lo * self.height().density(f0 + slope * s)
+        seg.s_lo * seg.shape.density(f0 + slope * s)
     }
 
     /// The next tentative collision of the majorant after `s` on the segment, or `None` at its
@@ -335,7 +392,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
         }
         let (f0, slope) = seg.bound.lower_line();
         let target = -rng.next_f64_open().ln() / seg.s_up;
-        self.height().invert_density_integral(f0 + slope * s, slope, seg.bound.length - s, target).map(|ds| s + ds)
+        seg.shape.invert_density_integral(f0 + slope * s, slope, seg.bound.length - s, target).map(|ds| s + ds)
     }
 
     /// The start of the segment after `seg`: the bound's end point or a fresh query.
@@ -370,14 +427,14 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
                 tentative = true;
                 let p = origin + (seg.t + s) * d;
                 let point = self.checked(self.surface.point_on_segment(p, &cache), p, stats)?;
-                let sigma_t = self.sigma_t(&point, d);
+                let (sigma_t, local) = self.sigma_t_at(p, &point, d)?;
                 let mu = self.majorant(&seg, s);
                 stats.tentative_collisions += 1;
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
                 }
                 if rng.next_f64() * mu < sigma_t {
-                    return Ok(TrackedFlight::Scatter { t: seg.t + s, point });
+                    return Ok(TrackedFlight::Scatter { t: seg.t + s, point, local });
                 }
             }
             previous = if !tentative && self.is_empty(&seg) {
@@ -407,11 +464,18 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
                 return Ok(transmittance);
             }
             let mut seg = self.next_segment(t, &start, origin, d, t_exit - t, previous, &mut cache, stats)?;
-            seg.s_lo = self.area.lower(seg.bound.cos);
+            // The control needs ρ(f_hi; σ) <= ρ(f; σ(p)): only with σ known on the segment (a
+            // field whose σ varies there gets none; ratio tracking alone stays unbiased). The
+            // projected area is smallest at the smallest roughness.
+            seg.s_lo = match seg.params {
+                ParamBounds { sigma: Some([lo, hi]), .. } if lo < hi => 0.0,
+                ParamBounds { alpha: Some([lo, _]), .. } => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(lo)).lower(seg.bound.cos),
+                _ => self.area.lower(seg.bound.cos),
+            };
             // The control's optical depth, in closed form.
             let (h0, h_slope) = seg.bound.upper_line();
             if seg.s_lo > 0.0 {
-                transmittance *= (-seg.s_lo * self.height().density_integral(h0, h_slope, seg.bound.length)).exp();
+                transmittance *= (-seg.s_lo * seg.shape.density_integral(h0, h_slope, seg.bound.length)).exp();
                 if !roulette(&mut transmittance, rng) {
                     return Ok(0.0);
                 }
@@ -429,7 +493,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
                 }
                 let p = origin + (seg.t + s) * d;
                 let point = self.checked(self.surface.point_on_segment(p, &cache), p, stats)?;
-                let sigma_t = self.sigma_t(&point, d);
+                let (sigma_t, _) = self.sigma_t_at(p, &point, d)?;
                 stats.tentative_collisions += 1;
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) || sigma_t < mu_c * (1.0 - VIOLATION_SLACK) {
                     stats.majorant_violations += 1;

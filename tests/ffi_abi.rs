@@ -464,8 +464,8 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
         let mut flights = vec![unsafe { std::mem::zeroed::<mf_collision>() }; queries.len()];
         let mut shadows = vec![unsafe { std::mem::zeroed::<mf_transmittance>() }; queries.len()];
         unsafe {
-            assert_eq!(mf_track_free_flight_batch(medium, handle, ptr::null_mut(), queries.as_ptr(), queries.len(), flights.as_mut_ptr()), mf_status::MF_OK);
-            assert_eq!(mf_track_transmittance_batch(medium, handle, ptr::null_mut(), queries.as_ptr(), queries.len(), shadows.as_mut_ptr()), mf_status::MF_OK);
+            assert_eq!(mf_track_free_flight_batch(medium, handle, ptr::null(), ptr::null_mut(), queries.as_ptr(), queries.len(), flights.as_mut_ptr()), mf_status::MF_OK);
+            assert_eq!(mf_track_transmittance_batch(medium, handle, ptr::null(), ptr::null_mut(), queries.as_ptr(), queries.len(), shadows.as_mut_ptr()), mf_status::MF_OK);
         }
         let (mut scattered, mut partial) = (0, 0);
         for (i, q) in queries.iter().enumerate() {
@@ -475,14 +475,14 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
             let mut c = unsafe { std::mem::zeroed::<mf_collision>() };
             let mut t = unsafe { std::mem::zeroed::<mf_transmittance>() };
             unsafe {
-                assert_eq!(mf_track_free_flight(medium, handle, ptr::null_mut(), q, &mut c), mf_status::MF_OK, "{ctx}");
-                assert_eq!(mf_track_transmittance(medium, handle, ptr::null_mut(), q, &mut t), mf_status::MF_OK, "{ctx}");
+                assert_eq!(mf_track_free_flight(medium, handle, ptr::null(), ptr::null_mut(), q, &mut c), mf_status::MF_OK, "{ctx}");
+                assert_eq!(mf_track_transmittance(medium, handle, ptr::null(), ptr::null_mut(), q, &mut t), mf_status::MF_OK, "{ctx}");
             }
             assert_eq!(c, flights[i], "{ctx}: batch and single free flights differ");
             assert_eq!(t, shadows[i], "{ctx}: batch and single transmittances differ");
             let mut s = TrackStats::default();
             match tracker.sample_free_flight(o, d, q.t_max, &mut Pcg32::new(q.seed, TRACK_STREAM), &mut s).unwrap() {
-                TrackedFlight::Scatter { t: tc, point } => {
+                TrackedFlight::Scatter { t: tc, point, .. } => {
                     scattered += 1;
                     assert!(c.scattered, "{ctx}: the core scatters");
                     assert_eq!((c.t.to_bits(), c.f.to_bits()), (tc.to_bits(), point.f.to_bits()), "{ctx}: collision");

@@ -8,6 +8,7 @@ mod common;
 
 use common::meshes::{self, Mesh};
 use glam::{DVec2, DVec3};
+use macrofacet::field::{Constant, LocalParams, MediumField, ParamBounds};
 use macrofacet::height::HeightProfile;
 use macrofacet::ndf::{Beckmann, Gpss, MicrofacetDistribution, Ndf};
 use macrofacet::rng::Pcg32;
@@ -36,7 +37,7 @@ struct OpticalDepth {
 }
 
 impl OpticalDepth {
-    fn new<S: MeanSurface>(tracker: &Tracker<S>, surface: &S, sigma: f64, o: DVec3, d: DVec3, t_max: f64) -> Self {
+    fn new<S: MeanSurface, F: MediumField>(tracker: &Tracker<S, F>, surface: &S, sigma: f64, o: DVec3, d: DVec3, t_max: f64) -> Self {
         let h = sigma / 20.0;
         let nodes = common::gauss_legendre(4);
         let mut tau = vec![0.0];
@@ -45,7 +46,8 @@ impl OpticalDepth {
             let mut panel = 0.0;
             for &(x, w) in &nodes {
                 let s = t + 0.5 * h * (1.0 + x);
-                panel += 0.5 * h * w * tracker.sigma_t(&surface.point(o + s * d).unwrap(), d);
+                let p = o + s * d;
+                panel += 0.5 * h * w * tracker.sigma_t_at(p, &surface.point(p).unwrap(), d).unwrap().0;
             }
             tau.push(tau.last().unwrap() + panel);
             t += h;
@@ -140,11 +142,18 @@ fn ray(name: &'static str, origin: DVec3, toward: DVec3, t_max: f64) -> Case {
 /// Checks one surface: per ray, free flights (KS vs exact, pass fraction) and transmittance
 /// (mean vs exact); returns the number of statistical comparisons failed and the stats.
 fn check_surface<S: MeanSurface>(label: &str, m: &MacrofacetMedium, surface: &S, cases: &[Case], n: usize, alpha: f64, seed: u64) -> (usize, TrackStats) {
-    let tracker = Tracker::new(m, surface);
+    check_field(label, m, surface, &Constant, m.height.sigma, cases, n, alpha, seed)
+}
+
+/// [`check_surface`] for a medium whose parameters `field` gives (quadrature panels of
+/// `sigma_min / 20`).
+#[allow(clippy::too_many_arguments)]
+fn check_field<S: MeanSurface, F: MediumField>(label: &str, m: &MacrofacetMedium, surface: &S, field: &F, sigma_min: f64, cases: &[Case], n: usize, alpha: f64, seed: u64) -> (usize, TrackStats) {
+    let tracker = Tracker::with_field(m, surface, field);
     let mut failures = 0;
     let mut total = TrackStats::default();
     for (k, case) in cases.iter().enumerate() {
-        let tau = OpticalDepth::new(&tracker, surface, m.height.sigma, case.origin, case.d, case.t_max);
+        let tau = OpticalDepth::new(&tracker, surface, sigma_min, case.origin, case.d, case.t_max);
         let tau_max = tau.at(case.t_max);
         let p_pass = (-tau_max).exp();
         let mut rng = Pcg32::new(seed, k as u64);
@@ -154,7 +163,7 @@ fn check_surface<S: MeanSurface>(label: &str, m: &MacrofacetMedium, surface: &S,
             let mut one = TrackStats::default();
             let seed = rng.next_u32() as u64 | (rng.next_u32() as u64) << 32;
             match tracker.sample_free_flight(case.origin, case.d, case.t_max, &mut Pcg32::new(seed, 1), &mut one).unwrap() {
-                TrackedFlight::Scatter { t, point } => {
+                TrackedFlight::Scatter { t, point, .. } => {
                     assert!(t >= 0.0 && t <= case.t_max, "{label}/{}: t = {t} outside [0, {}]", case.name, case.t_max);
                     assert!((point.f - surface.point(case.origin + t * case.d).unwrap().f).abs() < 1e-9);
                     distances.push(t);
@@ -289,7 +298,7 @@ fn brute_force_delta_tracking_agrees() {
     let cases_sphere = sphere_cases(1.0, 0.1);
     let cases_cube = [ray("corner", DVec3::new(-3.0, -3.0, 3.0), DVec3::new(1.1, 1.1, -1.1), 8.0), ray("edge", DVec3::new(-3.0, 1.1, 1.2), DVec3::new(3.0, 1.1, 1.2), 7.0)];
     let alpha = sidak_alpha(0.01, 2 * (cases_sphere.len() + cases_cube.len()));
-    let mut run = |label: &str, surface: &dyn Fn(DVec3, DVec3, f64, &mut Pcg32, bool) -> Option<f64>, case: &Case, k: u64| {
+    let run = |label: &str, surface: &dyn Fn(DVec3, DVec3, f64, &mut Pcg32, bool) -> Option<f64>, case: &Case, k: u64| {
         let (mut a, mut b) = (Vec::new(), Vec::new());
         let mut rng = Pcg32::new(99, k);
         for _ in 0..n {
@@ -516,5 +525,128 @@ fn enclosure_contains_the_region() {
         check("torus", &torus, level, 1);
         check("cube", &cube, level, 2);
         check("sphere", &sphere, level, 3);
+    }
+}
+
+/// A field over a unit sphere: `σ` jumps across the plane `x = 0`, the roughness grows with `y`;
+/// or a world-fixed anisotropy `Σ` (seeds/004 Eq. 25) whose axes leave the surface's frame. The
+/// bounds come from the segment's extent in `x` and `y` (both parameters are monotone in them);
+/// `understate` reports the larger σ as if constant, to test that wrong bounds are counted.
+struct TestField {
+    sigma: [f64; 2],
+    alpha: [f64; 2],
+    anisotropy: Option<glam::DMat3>,
+    understate: bool,
+}
+
+impl TestField {
+    fn alpha_at(&self, y: f64) -> f64 {
+        self.alpha[0] + (self.alpha[1] - self.alpha[0]) * ((y + 1.5) / 3.0).clamp(0.0, 1.0)
+    }
+    fn sigma_at(&self, x: f64) -> f64 {
+        if x < 0.0 { self.sigma[0] } else { self.sigma[1] }
+    }
+}
+
+impl MediumField for TestField {
+    fn at(&self, p: DVec3, _: &macrofacet::surface::SurfacePoint) -> macrofacet::Result<LocalParams> {
+        let sigma = self.sigma_at(p.x);
+        Ok(match self.anisotropy {
+            Some(a) => LocalParams { sigma: Some(sigma), anisotropy: Some(a), ..Default::default() },
+            None => LocalParams { sigma: Some(sigma), alpha: Some(DVec3::new(self.alpha_at(p.y), 0.7 * self.alpha_at(p.y), 0.5)), ..Default::default() },
+        })
+    }
+    fn bounds(&self, p: DVec3, d: DVec3, length: f64) -> macrofacet::Result<ParamBounds> {
+        let q = p + length * d;
+        let sigma = [self.sigma_at(p.x.min(q.x)), self.sigma_at(p.x.max(q.x))];
+        let alpha = match self.anisotropy {
+            // √λ(2σ²Σ⁻¹) over Σ's eigenvalues (its diagonal here) and the σ range.
+            Some(a) => {
+                let l = [a.x_axis.x, a.y_axis.y, a.z_axis.z];
+                let (lmin, lmax) = (l.iter().copied().fold(f64::INFINITY, f64::min), l.iter().copied().fold(0.0, f64::max));
+                [(2.0f64).sqrt() * sigma[0] / lmax.sqrt(), (2.0f64).sqrt() * sigma[1] / lmin.sqrt()]
+            }
+            None => {
+                let (a, b) = (self.alpha_at(p.y.min(q.y)), self.alpha_at(p.y.max(q.y)));
+                [0.7 * a.min(0.5 / 0.7), b.max(0.5)]
+            }
+        };
+        let sigma = if self.understate { [self.sigma[1], self.sigma[1]] } else { sigma };
+        Ok(ParamBounds { sigma: Some(sigma), alpha: Some(alpha) })
+    }
+    fn sigma_max(&self) -> Option<f64> {
+        Some(self.sigma[1])
+    }
+}
+
+#[test]
+fn spatially_varying_fields_track_without_bias() {
+    // Issue 12: σ jumping across x = 0 and a roughness growing along y, then a world-fixed
+    // anisotropy Σ that couples the normal and the tangents on the sphere; free flights against
+    // the exact distribution and transmittance against exp(-τ), τ by quadrature of the local σ_t.
+    let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
+    let gpss = medium(Ndf::Gpss(Gpss::new(0.3, 0.3, 0.5).unwrap()), 0.05);
+    let beckmann = medium(Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), 0.05);
+    let stepped = TestField { sigma: [0.03, 0.08], alpha: [0.15, 0.8], anisotropy: None, understate: false };
+    let aniso = TestField { sigma: [0.05, 0.05], alpha: [0.0, 0.0], anisotropy: Some(glam::DMat3::from_diagonal(DVec3::new(0.04, 0.25, 0.01))), understate: false };
+    let mut cases = sphere_cases(1.0, 0.05);
+    cases.push(ray("across_the_step", DVec3::new(-3.0, 0.2, 1.02), DVec3::new(3.0, 0.2, 1.02), 6.0));
+    let runs: [(&str, &MacrofacetMedium, &TestField); 3] = [("gpss stepped", &gpss, &stepped), ("beckmann stepped", &beckmann, &stepped), ("gpss anisotropy", &gpss, &aniso)];
+    let alpha = sidak_alpha(0.01, 3 * cases.len() * runs.len());
+    let mut failures = 0;
+    for (k, (name, m, field)) in runs.iter().enumerate() {
+        let (f, stats) = check_field(name, m, &sphere, *field, 0.03, &cases, 2000, alpha, 41 + k as u64);
+        failures += f;
+        assert_eq!(stats.majorant_violations, 0, "{name}: majorant violated");
+    }
+    assert_eq!(failures, 0);
+
+    // Bounds that claim the larger σ where the smaller holds (so ρ below the mean surface is
+    // underestimated) are caught: violations are counted.
+    let liar = TestField { understate: true, ..stepped };
+    let tracker = Tracker::with_field(&gpss, &sphere, &liar);
+    let mut stats = TrackStats::default();
+    for i in 0..2000 {
+        let mut rng = Pcg32::new(i, 3);
+        let o = DVec3::new(-3.0, 0.2 * rng.next_f64(), 0.1);
+        tracker.sample_free_flight(o, DVec3::X, 6.0, &mut rng, &mut stats).unwrap();
+    }
+    assert!(stats.majorant_violations > 0, "understated bounds went unnoticed");
+}
+
+#[test]
+fn a_field_of_the_medium_s_own_values_changes_nothing() {
+    // Issue 12: constant parameters given through a field equal the scalar medium (same seed:
+    // identical free flights; transmittance estimates identical too while σ is known).
+    struct Same(f64);
+    impl MediumField for Same {
+        fn at(&self, _: DVec3, _: &macrofacet::surface::SurfacePoint) -> macrofacet::Result<LocalParams> {
+            Ok(LocalParams { sigma: Some(self.0), ..Default::default() })
+        }
+        fn bounds(&self, _: DVec3, _: DVec3, _: f64) -> macrofacet::Result<ParamBounds> {
+            Ok(ParamBounds { sigma: Some([self.0, self.0]), alpha: None })
+        }
+        fn sigma_max(&self) -> Option<f64> {
+            Some(self.0)
+        }
+    }
+    let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
+    let m = medium(Ndf::Gpss(Gpss::new(0.3, 0.5, 0.2).unwrap()), 0.05);
+    let (plain, field) = (Tracker::new(&m, &sphere), Tracker::with_field(&m, &sphere, &Same(0.05)));
+    for (k, case) in sphere_cases(1.0, 0.05).iter().enumerate() {
+        for i in 0..300 {
+            let seed = (k * 1000 + i) as u64;
+            let (mut s0, mut s1) = (TrackStats::default(), TrackStats::default());
+            let a = plain.sample_free_flight(case.origin, case.d, case.t_max, &mut Pcg32::new(seed, 1), &mut s0).unwrap();
+            let b = field.sample_free_flight(case.origin, case.d, case.t_max, &mut Pcg32::new(seed, 1), &mut s1).unwrap();
+            match (a, b) {
+                (TrackedFlight::Scatter { t: ta, .. }, TrackedFlight::Scatter { t: tb, .. }) => assert_eq!(ta.to_bits(), tb.to_bits(), "{}", case.name),
+                (TrackedFlight::Pass, TrackedFlight::Pass) => {}
+                other => panic!("{}: {other:?}", case.name),
+            }
+            let ta = plain.transmittance(case.origin, case.d, case.t_max, &mut Pcg32::new(seed, 2), &mut s0).unwrap();
+            let tb = field.transmittance(case.origin, case.d, case.t_max, &mut Pcg32::new(seed, 2), &mut s1).unwrap();
+            assert_eq!(ta.to_bits(), tb.to_bits(), "{}: transmittance", case.name);
+        }
     }
 }

@@ -134,7 +134,7 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, int, Samp
     *pdf_ratio = Rgb(1.0f);
     mf_track_query q = query(ray, t_max, sampler);
     mf_collision c;
-    if (mf_track_free_flight(handle_, surface_->handle(), nullptr, &q, &c) != MF_OK)
+    if (mf_track_free_flight(handle_, surface_->handle(), nullptr, nullptr, &q, &c) != MF_OK)
         throw Error(label_ + ": mf_track_free_flight failed: " + last_error());
     count(c.stats);
     if (!c.scattered) return false;
@@ -151,7 +151,7 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, int, Samp
 Rgb MacrofacetMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
     mf_track_query q = query(ray, t_max, sampler);
     mf_transmittance t;
-    if (mf_track_transmittance(handle_, surface_->handle(), nullptr, &q, &t) != MF_OK)
+    if (mf_track_transmittance(handle_, surface_->handle(), nullptr, nullptr, &q, &t) != MF_OK)
         throw Error(label_ + ": mf_track_transmittance failed: " + last_error());
     count(t.stats);
     return Rgb(float(t.transmittance));

@@ -152,7 +152,7 @@ static double shadow(vec3 o, vec3 d, int inside, rng *r) {
       object *obj = &g_objects[inside];
       mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r)};
       mf_transmittance tr;
-      check(mf_track_transmittance(obj->medium, obj->surface, &obj->shape, &q, &tr), "mf_track_transmittance");
+      check(mf_track_transmittance(obj->medium, obj->surface, NULL, &obj->shape, &q, &tr), "mf_track_transmittance");
       T *= tr.transmittance;
     }
     if (!hit) break;
@@ -182,7 +182,7 @@ static double radiance(vec3 o, vec3 d, rng *r, double rgb[3]) {
       object *obj = &g_objects[inside];
       mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r)};
       mf_collision c;
-      check(mf_track_free_flight(obj->medium, obj->surface, &obj->shape, &q, &c), "mf_track_free_flight");
+      check(mf_track_free_flight(obj->medium, obj->surface, NULL, &obj->shape, &q, &c), "mf_track_free_flight");
       if (c.scattered) {
         vec3 p = from_mf(c.p);
         mf_vec3 wi = to_mf(mul(d, -1)); /* wi points away from the event */

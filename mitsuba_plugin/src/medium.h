@@ -123,7 +123,7 @@ public:
         const mf_track_query query{mf_vec3{ray.o.x(), ray.o.y(), ray.o.z()}, unit(ray.d.x(), ray.d.y(), ray.d.z()), t_max,
                                    hash_floats(key, 7, state_->seed_salt)};
         mf_collision c;
-        if (mf_track_free_flight(state_->medium, state_->surface->handle(), nullptr, &query, &c) != MF_OK) {
+        if (mf_track_free_flight(state_->medium, state_->surface->handle(), nullptr, nullptr, &query, &c) != MF_OK) {
             state_->errors.fetch_add(1, std::memory_order_relaxed);
             return {false, inf, inf};
         }

@@ -123,7 +123,7 @@ impl From<DVec3> for mf_vec3 {
     }
 }
 
-fn rgb(c: [f64; 3]) -> mf_rgb {
+pub(crate) fn rgb(c: [f64; 3]) -> mf_rgb {
     mf_rgb { r: c[0], g: c[1], b: c[2] }
 }
 
@@ -131,12 +131,12 @@ fn invalid(message: String) -> FfiError {
     Error::new(ErrorKind::InvalidArgument, message).into()
 }
 
-fn frame(f: &mf_frame) -> FfiResult<Frame> {
+pub(crate) fn frame(f: &mf_frame) -> FfiResult<Frame> {
     Ok(Frame::from_normal_tangent(f.normal.into(), f.tangent.into())?)
 }
 
 /// A world-space unit direction, in the local frame.
-fn local_direction(frame: &Frame, name: &str, v: mf_vec3) -> FfiResult<DVec3> {
+pub(crate) fn local_direction(frame: &Frame, name: &str, v: mf_vec3) -> FfiResult<DVec3> {
     Ok(frame.to_local(check_direction(name, v.into())?))
 }
 
@@ -384,13 +384,8 @@ pub unsafe extern "C" fn mf_phase_eval_pdf(
     wo: mf_vec3,
     out_value: *mut mf_phase_value,
 ) -> mf_status {
-    boundary(|| {
-        let m = arg(medium, "medium")?;
-        let q = mf_phase_query { frame: *arg(frame_, "frame")?, wi, wo };
-        let (value, pdf) = phase_eval(&m.inner, &q)?;
-        *out(out_value, "out_value")? = mf_phase_value { value, pdf };
-        Ok(())
-    })
+    // SAFETY: forwarded under the same contract.
+    unsafe { super::mf_phase_eval_pdf_local(medium, std::ptr::null(), frame_, wi, wo, out_value) }
 }
 
 /// The density with which [`mf_phase_sample`] picks `wo` (per solid angle).
@@ -416,12 +411,16 @@ pub unsafe extern "C" fn mf_phase_pdf(
 }
 
 fn phase_sample(m: &MacrofacetMedium, q: &mf_phase_sample_query) -> FfiResult<mf_phase_sample_result> {
-    let fr = frame(&q.frame)?;
-    let wi = local_direction(&fr, "wi", q.wi)?;
-    for (i, u) in q.u.iter().enumerate() {
+    phase_sample_with(m, &frame(&q.frame)?, q.wi, q.u)
+}
+
+/// One phase sample in a checked frame (also the `_local` calls').
+pub(crate) fn phase_sample_with(m: &MacrofacetMedium, fr: &Frame, wi: mf_vec3, u: [f64; MF_PHASE_SAMPLE_DIMENSIONS]) -> FfiResult<mf_phase_sample_result> {
+    let wi = local_direction(fr, "wi", wi)?;
+    for (i, u) in u.iter().enumerate() {
         uniform(format_args!("u[{i}]"), *u)?;
     }
-    Ok(match m.phase.sample(wi, q.u) {
+    Ok(match m.phase.sample(wi, u) {
         Some(s) => mf_phase_sample_result { wo: fr.to_world(s.wo).into(), weight: rgb(s.weight), pdf: s.pdf, valid: true },
         None => mf_phase_sample_result { wo: DVec3::ZERO.into(), weight: rgb([0.0; 3]), pdf: 0.0, valid: false },
     })
@@ -440,17 +439,8 @@ pub unsafe extern "C" fn mf_phase_sample(
     u: *const f64,
     out_sample: *mut mf_phase_sample_result,
 ) -> mf_status {
-    boundary(|| {
-        let m = arg(medium, "medium")?;
-        let first = arg(u, "u")?;
-        // SAFETY: the caller promises MF_PHASE_SAMPLE_DIMENSIONS readable doubles at `u`.
-        let u: [f64; MF_PHASE_SAMPLE_DIMENSIONS] =
-            unsafe { std::slice::from_raw_parts(first, MF_PHASE_SAMPLE_DIMENSIONS) }.try_into().expect("length");
-        let q = mf_phase_sample_query { frame: *arg(frame_, "frame")?, wi, u };
-        let result = phase_sample(&m.inner, &q)?;
-        *out(out_sample, "out_sample")? = result;
-        Ok(())
-    })
+    // SAFETY: forwarded under the same contract.
+    unsafe { super::mf_phase_sample_local(medium, std::ptr::null(), frame_, wi, u, out_sample) }
 }
 
 /// Runs `one` over a batch; validates every query before anything is written, so that on error

@@ -15,12 +15,14 @@
 
 #![allow(non_camel_case_types)]
 
+mod field;
 mod gpis;
 mod medium;
 mod params;
 mod surface;
 mod track;
 
+pub use field::*;
 pub use gpis::*;
 pub use medium::*;
 pub use params::*;

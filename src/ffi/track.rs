@@ -8,6 +8,7 @@
 //! the same result. Hosts derive the
 //! seed from their sampler (e.g. a hash of pixel, sample index and bounce).
 
+use super::field::{mf_field, mf_local_params, CallbackField};
 use super::medium::{mf_frame, mf_medium, mf_vec3};
 use super::surface::{with_surface, mf_surface, SurfaceVisitor};
 use super::{arg, boundary, mf_status, out, FfiError, FfiResult};
@@ -15,6 +16,7 @@ use crate::error::{Error, ErrorKind};
 use crate::frame::check_direction;
 use crate::medium::MacrofacetMedium;
 use crate::rng::Pcg32;
+use crate::field::MediumField;
 use crate::surface::MeanSurface;
 use crate::tracking::{TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
 use glam::DVec3;
@@ -56,6 +58,8 @@ pub struct mf_collision {
     pub p: mf_vec3,
     pub f: f64,
     pub frame: mf_frame,
+    /// The field's parameters at the collision (`set = 0` without a field or when passing).
+    pub local: mf_local_params,
     pub stats: mf_track_stats,
 }
 
@@ -87,9 +91,20 @@ fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64)> {
 }
 
 /// One call: a free flight or a transmittance, generic over the surface kind.
-enum Call<'a> {
-    FreeFlight(&'a MacrofacetMedium, (DVec3, DVec3, f64), u64),
-    Transmittance(&'a MacrofacetMedium, (DVec3, DVec3, f64), u64),
+/// One call: a free flight or a transmittance, with the field (if any) and the host's data.
+struct Call<'a> {
+    kind: Kind,
+    medium: &'a MacrofacetMedium,
+    field: Option<&'a mf_field>,
+    user_data: *mut c_void,
+    ray: (DVec3, DVec3, f64),
+    seed: u64,
+}
+
+#[derive(Clone, Copy)]
+enum Kind {
+    FreeFlight,
+    Transmittance,
 }
 
 enum Outcome {
@@ -100,40 +115,74 @@ enum Outcome {
 impl SurfaceVisitor for Call<'_> {
     type Output = crate::error::Result<Outcome>;
     fn visit<S: MeanSurface>(self, surface: &S) -> Self::Output {
+        match self.field {
+            None => self.run(&Tracker::new(self.medium, surface)),
+            Some(field) => {
+                let field = CallbackField::new(field, self.user_data);
+                self.run(&Tracker::with_field(self.medium, surface, &field))
+            }
+        }
+    }
+}
+
+impl Call<'_> {
+    fn run<S: MeanSurface, F: MediumField>(&self, tracker: &Tracker<S, F>) -> crate::error::Result<Outcome> {
         let mut stats = TrackStats::default();
-        match self {
-            Call::FreeFlight(medium, (origin, d, t_max), seed) => {
-                let flight = Tracker::new(medium, surface).sample_free_flight(origin, d, t_max, &mut Pcg32::new(seed, TRACK_STREAM), &mut stats)?;
+        let (origin, d, t_max) = self.ray;
+        let rng = &mut Pcg32::new(self.seed, TRACK_STREAM);
+        match self.kind {
+            Kind::FreeFlight => {
+                let flight = tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?;
                 let zero = DVec3::ZERO.into();
                 Ok(Outcome::Collision(match flight {
-                    TrackedFlight::Scatter { t, point } => mf_collision {
+                    TrackedFlight::Scatter { t, point, local } => mf_collision {
                         scattered: true,
                         t,
                         p: (origin + t * d).into(),
                         f: point.f,
                         frame: mf_frame { normal: point.normal.into(), tangent: point.tangent.into() },
+                        local: (&local).into(),
                         stats: stats.into(),
                     },
-                    TrackedFlight::Pass => mf_collision { scattered: false, t: t_max, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, stats: stats.into() },
+                    TrackedFlight::Pass => mf_collision {
+                        scattered: false,
+                        t: t_max,
+                        p: zero,
+                        f: 0.0,
+                        frame: mf_frame { normal: zero, tangent: zero },
+                        local: mf_local_params::NONE,
+                        stats: stats.into(),
+                    },
                 }))
             }
-            Call::Transmittance(medium, (origin, d, t_max), seed) => {
-                let transmittance = Tracker::new(medium, surface).transmittance(origin, d, t_max, &mut Pcg32::new(seed, TRACK_STREAM), &mut stats)?;
+            Kind::Transmittance => {
+                let transmittance = tracker.transmittance(origin, d, t_max, rng, &mut stats)?;
                 Ok(Outcome::Transmittance(mf_transmittance { transmittance, stats: stats.into() }))
             }
         }
     }
 }
 
-fn free_flight(medium: &mf_medium, surface: &mf_surface, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_collision> {
-    match with_surface(surface, user_data, Call::FreeFlight(&medium.inner, query(q)?, q.seed))? {
+/// The optional field argument.
+fn field_arg<'a>(field: *const mf_field) -> Option<&'a mf_field> {
+    // SAFETY: NULL or a live handle, as the caller promises.
+    unsafe { field.as_ref() }
+}
+
+fn track(kind: Kind, medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<Outcome> {
+    let call = Call { kind, medium: &medium.inner, field, user_data, ray: query(q)?, seed: q.seed };
+    Ok(with_surface(surface, user_data, call)?)
+}
+
+fn free_flight(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_collision> {
+    match track(Kind::FreeFlight, medium, surface, field, user_data, q)? {
         Outcome::Collision(c) => Ok(c),
         Outcome::Transmittance(_) => unreachable!("a free flight returns a collision"),
     }
 }
 
-fn transmittance(medium: &mf_medium, surface: &mf_surface, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_transmittance> {
-    match with_surface(surface, user_data, Call::Transmittance(&medium.inner, query(q)?, q.seed))? {
+fn transmittance(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_transmittance> {
+    match track(Kind::Transmittance, medium, surface, field, user_data, q)? {
         Outcome::Transmittance(t) => Ok(t),
         Outcome::Collision(_) => unreachable!("a transmittance returns a transmittance"),
     }
@@ -143,8 +192,11 @@ fn transmittance(medium: &mf_medium, surface: &mf_surface, user_data: *mut c_voi
 /// to the next real collision, with its local frame (for `mf_phase_*`). Delta tracking against
 /// majorants built from the planar closed forms and the surface's segment bounds: exact (every
 /// tentative collision real) for a planar surface, unbiased for any surface whose bounds hold.
-/// `user_data` is passed to the surface's callbacks. Errors: invalid arguments, a callback's
-/// failure or invalid answer (NaN, non-unit normal, inconsistent bound) — reported at once.
+/// `field` (NULL for a stationary medium) gives spatially varying parameters; the collision then
+/// reports them in `local`, for `mf_phase_sample_local` / `mf_phase_eval_pdf_local`.
+/// `user_data` is passed to the surface's and the field's callbacks. Errors: invalid arguments, a
+/// callback's failure or invalid answer (NaN, non-unit normal, inconsistent bound) — reported at
+/// once.
 ///
 /// # Safety
 /// Pointers must be NULL or valid; the callbacks must be safe to call with `user_data`.
@@ -152,6 +204,7 @@ fn transmittance(medium: &mf_medium, surface: &mf_surface, user_data: *mut c_voi
 pub unsafe extern "C" fn mf_track_free_flight(
     medium: *const mf_medium,
     surface: *const mf_surface,
+    field: *const mf_field,
     user_data: *mut c_void,
     query: *const mf_track_query,
     out_collision: *mut mf_collision,
@@ -159,7 +212,7 @@ pub unsafe extern "C" fn mf_track_free_flight(
     boundary(|| {
         let (m, s, q) = (arg(medium, "medium")?, arg(surface, "surface")?, arg(query, "query")?);
         let slot = out(out_collision, "out_collision")?;
-        *slot = free_flight(m, s, user_data, q)?;
+        *slot = free_flight(m, s, field_arg(field), user_data, q)?;
         Ok(())
     })
 }
@@ -173,6 +226,7 @@ pub unsafe extern "C" fn mf_track_free_flight(
 pub unsafe extern "C" fn mf_track_transmittance(
     medium: *const mf_medium,
     surface: *const mf_surface,
+    field: *const mf_field,
     user_data: *mut c_void,
     query: *const mf_track_query,
     out_transmittance: *mut mf_transmittance,
@@ -180,7 +234,7 @@ pub unsafe extern "C" fn mf_track_transmittance(
     boundary(|| {
         let (m, s, q) = (arg(medium, "medium")?, arg(surface, "surface")?, arg(query, "query")?);
         let slot = out(out_transmittance, "out_transmittance")?;
-        *slot = transmittance(m, s, user_data, q)?;
+        *slot = transmittance(m, s, field_arg(field), user_data, q)?;
         Ok(())
     })
 }
@@ -190,11 +244,12 @@ pub unsafe extern "C" fn mf_track_transmittance(
 fn track_batch<R: Copy>(
     medium: *const mf_medium,
     surface: *const mf_surface,
+    field: *const mf_field,
     user_data: *mut c_void,
     queries: *const mf_track_query,
     count: usize,
     output: *mut R,
-    one: impl Fn(&mf_medium, &mf_surface, *mut c_void, &mf_track_query) -> FfiResult<R>,
+    one: impl Fn(&mf_medium, &mf_surface, Option<&mf_field>, *mut c_void, &mf_track_query) -> FfiResult<R>,
 ) -> mf_status {
     boundary(|| {
         let (m, s) = (arg(medium, "medium")?, arg(surface, "surface")?);
@@ -209,7 +264,7 @@ fn track_batch<R: Copy>(
         for (i, q) in queries.iter().enumerate() {
             query(q).map_err(|e| at(i, e))?;
         }
-        let results = queries.iter().enumerate().map(|(i, q)| one(m, s, user_data, q).map_err(|e| at(i, e))).collect::<FfiResult<Vec<R>>>()?;
+        let results = queries.iter().enumerate().map(|(i, q)| one(m, s, field_arg(field), user_data, q).map_err(|e| at(i, e))).collect::<FfiResult<Vec<R>>>()?;
         // SAFETY: see above; `output` is non-NULL.
         unsafe { std::slice::from_raw_parts_mut(output, count) }.copy_from_slice(&results);
         Ok(())
@@ -224,12 +279,13 @@ fn track_batch<R: Copy>(
 pub unsafe extern "C" fn mf_track_free_flight_batch(
     medium: *const mf_medium,
     surface: *const mf_surface,
+    field: *const mf_field,
     user_data: *mut c_void,
     queries: *const mf_track_query,
     count: usize,
     out_collisions: *mut mf_collision,
 ) -> mf_status {
-    track_batch(medium, surface, user_data, queries, count, out_collisions, free_flight)
+    track_batch(medium, surface, field, user_data, queries, count, out_collisions, free_flight)
 }
 
 /// Batch form of [`mf_track_transmittance`].
@@ -240,10 +296,11 @@ pub unsafe extern "C" fn mf_track_free_flight_batch(
 pub unsafe extern "C" fn mf_track_transmittance_batch(
     medium: *const mf_medium,
     surface: *const mf_surface,
+    field: *const mf_field,
     user_data: *mut c_void,
     queries: *const mf_track_query,
     count: usize,
     out_transmittances: *mut mf_transmittance,
 ) -> mf_status {
-    track_batch(medium, surface, user_data, queries, count, out_transmittances, transmittance)
+    track_batch(medium, surface, field, user_data, queries, count, out_transmittances, transmittance)
 }

@@ -1384,9 +1384,9 @@ static void test_surfaces_and_tracking(void) {
   EXPECT_OK(mf_medium_shell_top(m, &top));
   const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99};
   mf_collision c1, c2;
-  EXPECT_OK(mf_track_free_flight(m, sphere, NULL, &q, &c1));
+  EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &c1));
   hs.calls = 0;
-  EXPECT_OK(mf_track_free_flight(m, callbacks, &hs, &q, &c2));
+  EXPECT_OK(mf_track_free_flight(m, callbacks, NULL, &hs, &q, &c2));
   CHECK(c1.scattered && c2.scattered && fabs(c1.t - c2.t) < 1e-12 && fabs(dot(c1.frame.normal, c2.frame.normal) - 1) < 1e-12,
         "the host and the built-in sphere must track alike (t %.17g vs %.17g)", c1.t, c2.t);
   CHECK(hs.calls >= (int)c2.stats.surface_queries && c2.stats.segments > 0, "callback calls %d vs queries %u",
@@ -1406,31 +1406,31 @@ static void test_surfaces_and_tracking(void) {
 
   mf_transmittance t1, t2;
   const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5};
-  EXPECT_OK(mf_track_transmittance(m, sphere, NULL, &up, &t1));
-  EXPECT_OK(mf_track_transmittance(m, sphere, NULL, &up, &t2));
+  EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t1));
+  EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t2));
   CHECK(t1.transmittance == t2.transmittance && t1.transmittance >= 0 && t1.transmittance <= 1,
         "transmittance %g / %g", t1.transmittance, t2.transmittance);
   /* Passing: t_max short of the shell. */
   const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5};
-  EXPECT_OK(mf_track_free_flight(m, mesh, NULL, &shortq, &c1));
+  EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &shortq, &c1));
   CHECK(!c1.scattered && c1.t == 0.5, "a ray that ends above the shell passes (t = %g)", c1.t);
 
   /* Batches equal single calls. */
   mf_track_query qs[3] = {q, up, shortq};
   mf_collision cs[3];
   mf_transmittance ts[3];
-  EXPECT_OK(mf_track_free_flight_batch(m, sphere, NULL, qs, 3, cs));
-  EXPECT_OK(mf_track_transmittance_batch(m, sphere, NULL, qs, 3, ts));
+  EXPECT_OK(mf_track_free_flight_batch(m, sphere, NULL, NULL, qs, 3, cs));
+  EXPECT_OK(mf_track_transmittance_batch(m, sphere, NULL, NULL, qs, 3, ts));
   for (int i = 0; i < 3; ++i) {
     mf_collision c;
     mf_transmittance t;
-    EXPECT_OK(mf_track_free_flight(m, sphere, NULL, &qs[i], &c));
-    EXPECT_OK(mf_track_transmittance(m, sphere, NULL, &qs[i], &t));
+    EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &qs[i], &c));
+    EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &qs[i], &t));
     CHECK(c.scattered == cs[i].scattered && c.t == cs[i].t && same_bits(&c.p, &cs[i].p, sizeof c.p) &&
               same_bits(&c.frame, &cs[i].frame, sizeof c.frame) && t.transmittance == ts[i].transmittance,
           "batch entry %d differs", i);
   }
-  EXPECT_OK(mf_track_free_flight_batch(m, sphere, NULL, NULL, 0, NULL));
+  EXPECT_OK(mf_track_free_flight_batch(m, sphere, NULL, NULL, NULL, 0, NULL));
 
   /* A bound that lies is caught by the violation count, and the call stays in range. */
   mf_surface *liar = NULL;
@@ -1441,7 +1441,7 @@ static void test_surfaces_and_tracking(void) {
   for (uint64_t seed = 0; seed < 50; ++seed) {
     mf_track_query lq = q;
     lq.seed = seed;
-    EXPECT_OK(mf_track_free_flight(m, liar, &hs, &lq, &c1));
+    EXPECT_OK(mf_track_free_flight(m, liar, NULL, &hs, &lq, &c1));
     CHECK(!c1.scattered || (c1.t >= 0 && c1.t <= 1 + top), "t = %g outside the segment", c1.t);
     violations += c1.stats.majorant_violations;
   }
@@ -1458,21 +1458,21 @@ static void test_surfaces_and_tracking(void) {
   } while (0)
   mf_track_query bad = q;
   bad.d = v3(0, 0, -2);
-  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
   bad = q;
   bad.origin.x = NAN;
-  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "origin");
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "origin");
   bad = q;
   bad.t_max = -1;
-  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "t_max");
-  TRACK_CASE(mf_track_free_flight(NULL, sphere, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "medium");
-  TRACK_CASE(mf_track_free_flight(m, NULL, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "surface");
-  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, &c1), MF_ERROR_NULL_POINTER, "query");
-  EXPECT_STATUS(mf_track_free_flight(m, sphere, NULL, &q, NULL), MF_ERROR_NULL_POINTER, "out_collision");
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "t_max");
+  TRACK_CASE(mf_track_free_flight(NULL, sphere, NULL, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "medium");
+  TRACK_CASE(mf_track_free_flight(m, NULL, NULL, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "surface");
+  TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, NULL, &c1), MF_ERROR_NULL_POINTER, "query");
+  EXPECT_STATUS(mf_track_free_flight(m, sphere, NULL, NULL, &q, NULL), MF_ERROR_NULL_POINTER, "out_collision");
   for (int mode = 1; mode <= 3; ++mode) {
     hs.mode = mode;
     hs.calls = 0;
-    TRACK_CASE(mf_track_free_flight(m, callbacks, &hs, &q, &c1), mode == 3 ? MF_ERROR_CALLBACK : MF_ERROR_INVALID_ARGUMENT,
+    TRACK_CASE(mf_track_free_flight(m, callbacks, NULL, &hs, &q, &c1), mode == 3 ? MF_ERROR_CALLBACK : MF_ERROR_INVALID_ARGUMENT,
                mode == 3 ? "returned 42" : (mode == 1 ? "f must not be NaN" : "normal must be unit"));
     CHECK(hs.calls == 1, "a bad host answer must be reported at once (%d calls)", hs.calls);
   }
@@ -1480,13 +1480,13 @@ static void test_surfaces_and_tracking(void) {
   mf_surface *nan_bounds = NULL;
   mf_surface_callbacks ncb = {host_sphere_point, nan_bound, MF_SURFACE_GENERAL, {-1, -1, -1}, {1, 1, 1}};
   EXPECT_OK(mf_surface_new_callbacks(&ncb, &nan_bounds));
-  TRACK_CASE(mf_track_free_flight(m, nan_bounds, &hs, &q, &c1), MF_ERROR_INVALID_ARGUMENT, "segment bound");
+  TRACK_CASE(mf_track_free_flight(m, nan_bounds, NULL, &hs, &q, &c1), MF_ERROR_INVALID_ARGUMENT, "segment bound");
   /* A batch with one bad query writes nothing and names it. */
   qs[1].d = v3(1, 1, 1);
   memset(cs, 0xA5, sizeof cs);
   mf_collision cs_before[3];
   memcpy(cs_before, cs, sizeof cs);
-  EXPECT_STATUS(mf_track_free_flight_batch(m, sphere, NULL, qs, 3, cs), MF_ERROR_INVALID_ARGUMENT, "query 1");
+  EXPECT_STATUS(mf_track_free_flight_batch(m, sphere, NULL, NULL, qs, 3, cs), MF_ERROR_INVALID_ARGUMENT, "query 1");
   CHECK(same_bits(cs_before, cs, sizeof cs), "a failed batch must write nothing");
 #undef TRACK_CASE
 
@@ -1534,6 +1534,154 @@ static void test_surfaces_and_tracking(void) {
   mf_medium_free(m);
 }
 
+/* A host field for test_fields: sigma GPSS_SIGMA below the plane x = 0 and twice that above
+ * (mode 0), the medium's own sigma everywhere (mode 1), a callback failure (mode 2), a negative
+ * sigma (mode 3), unknown bits in `set` (mode 4). */
+typedef struct host_field {
+  int mode;
+  int calls;
+} host_field;
+
+static double field_sigma(const host_field *h, double x) { return (h->mode == 0 && x >= 0) ? 2 * GPSS_SIGMA : GPSS_SIGMA; }
+
+static int32_t field_at(void *user_data, mf_vec3 p, const mf_surface_point *point, mf_local_params *out) {
+  host_field *h = (host_field *)user_data;
+  (void)point;
+  h->calls++;
+  if (h->mode == 2) return 7;
+  memset(out, 0, sizeof *out);
+  out->set = h->mode == 4 ? 0x100 : MF_LOCAL_SIGMA;
+  out->sigma = h->mode == 3 ? -1.0 : field_sigma(h, p.x);
+  return 0;
+}
+
+static int32_t field_bounds(void *user_data, mf_vec3 p, mf_vec3 d, double length, mf_param_bounds *out) {
+  host_field *h = (host_field *)user_data;
+  const double x0 = p.x, x1 = p.x + length * d.x;
+  out->set = MF_LOCAL_SIGMA;
+  out->sigma_lo = field_sigma(h, x0 < x1 ? x0 : x1);
+  out->sigma_hi = field_sigma(h, x0 < x1 ? x1 : x0);
+  out->alpha_lo = out->alpha_hi = 0;
+  return 0;
+}
+
+/* Spatially varying media (mf_field): a field of the medium's own values tracks exactly as no
+ * field; a stepped field reports its local sigma at collisions; the _local phase calls equal the
+ * plain ones without local parameters and scale with reflectance_scale; bad fields and bad
+ * local parameters get statuses and messages. */
+static void test_fields(void) {
+  mf_medium *m = gpss_conductor();
+  mf_surface *sphere = NULL;
+  EXPECT_OK(mf_surface_new_sphere(v3(0, 0, 0), 1.0, false, v3(0, 0, 1), &sphere));
+  mf_field *field = NULL, *unset = (mf_field *)0x1;
+  mf_field_callbacks cb = {field_at, field_bounds, 2 * GPSS_SIGMA};
+  EXPECT_OK(mf_field_new_callbacks(&cb, &field));
+  mf_field_callbacks no_at = {NULL, field_bounds, 0}, no_bounds = {field_at, NULL, 0}, bad_max = {field_at, field_bounds, -1};
+  EXPECT_STATUS(mf_field_new_callbacks(&no_at, &unset), MF_ERROR_NULL_POINTER, "callbacks->at");
+  EXPECT_STATUS(mf_field_new_callbacks(&no_bounds, &unset), MF_ERROR_NULL_POINTER, "callbacks->bounds");
+  EXPECT_STATUS(mf_field_new_callbacks(&bad_max, &unset), MF_ERROR_INVALID_ARGUMENT, "sigma_max");
+  EXPECT_STATUS(mf_field_new_callbacks(NULL, &unset), MF_ERROR_NULL_POINTER, "callbacks");
+  CHECK(unset == (mf_field *)0x1, "a failed mf_field_new_callbacks wrote its out-parameter");
+
+  /* The medium's own sigma through a field (sigma_max 0: sigma does not vary): the same
+   * collisions, bit for bit. */
+  mf_field *own = NULL;
+  mf_field_callbacks own_cb = {field_at, field_bounds, 0};
+  EXPECT_OK(mf_field_new_callbacks(&own_cb, &own));
+  host_field same = {1, 0};
+  for (uint64_t seed = 0; seed < 20; ++seed) {
+    const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, seed};
+    mf_collision plain, through;
+    EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &plain));
+    EXPECT_OK(mf_track_free_flight(m, sphere, own, &same, &q, &through));
+    CHECK(plain.scattered == through.scattered && plain.t == through.t, "seed %u: t %.17g vs %.17g", (unsigned)seed,
+          plain.t, through.t);
+    CHECK(plain.local.set == 0 && (!through.scattered || (through.local.set == MF_LOCAL_SIGMA && through.local.sigma == GPSS_SIGMA)),
+          "collision local parameters (set %u, sigma %g)", through.local.set, through.local.sigma);
+  }
+  CHECK(same.calls > 0, "the field must be asked");
+
+  /* A stepped field: collisions on the far side (x > 0) report the doubled sigma. */
+  host_field stepped = {0, 0};
+  int far_side = 0;
+  for (uint64_t seed = 0; seed < 40; ++seed) {
+    const mf_track_query q = {v3(3, 0.2, 0.1), v3(-1, 0, 0), INFINITY, seed};
+    mf_collision c;
+    EXPECT_OK(mf_track_free_flight(m, sphere, field, &stepped, &q, &c));
+    CHECK(c.stats.majorant_violations == 0, "violations with honest bounds");
+    if (c.scattered && c.p.x > 0) {
+      far_side++;
+      CHECK(c.local.sigma == 2 * GPSS_SIGMA, "local sigma %g at x = %g", c.local.sigma, c.p.x);
+    }
+    mf_transmittance t;
+    EXPECT_OK(mf_track_transmittance(m, sphere, field, &stepped, &q, &t));
+    CHECK(t.transmittance >= 0 && t.transmittance <= 1, "transmittance %g", t.transmittance);
+  }
+  CHECK(far_side > 20, "collisions on the stepped side: %d", far_side);
+
+  /* The _local phase calls: NULL local parameters give the plain calls; a reflectance scale of
+   * one half halves the value and the weight, not the density. */
+  const mf_frame fr = {v3(0, 0, 1), v3(1, 0, 0)};
+  const mf_vec3 wi = normalize(v3(0.2, 0.1, 1)), wo = normalize(v3(-0.3, 0.2, 0.9));
+  mf_phase_value plain, local, half;
+  EXPECT_OK(mf_phase_eval_pdf(m, &fr, wi, wo, &plain));
+  EXPECT_OK(mf_phase_eval_pdf_local(m, NULL, &fr, wi, wo, &local));
+  CHECK(same_bits(&plain, &local, sizeof plain), "eval_pdf_local(NULL) must equal eval_pdf");
+  mf_local_params scale;
+  memset(&scale, 0, sizeof scale);
+  scale.set = MF_LOCAL_REFLECTANCE_SCALE;
+  scale.reflectance_scale = (mf_rgb){0.5, 0.5, 0.5};
+  EXPECT_OK(mf_phase_eval_pdf_local(m, &scale, &fr, wi, wo, &half));
+  CHECK_ABS(half.value.r, 0.5 * plain.value.r, 1e-15);
+  CHECK(half.pdf == plain.pdf, "the density does not depend on the reflectance");
+  const double u[MF_PHASE_SAMPLE_DIMENSIONS] = {0.3, 0.6, 0.2, 0.5, 0.5};
+  mf_phase_sample_result s0, s1, s2;
+  EXPECT_OK(mf_phase_sample(m, &fr, wi, u, &s0));
+  EXPECT_OK(mf_phase_sample_local(m, NULL, &fr, wi, u, &s1));
+  EXPECT_OK(mf_phase_sample_local(m, &scale, &fr, wi, u, &s2));
+  CHECK(s0.valid == s1.valid && s0.pdf == s1.pdf && same_bits(&s0.wo, &s1.wo, sizeof s0.wo) && same_bits(&s0.weight, &s1.weight, sizeof s0.weight),
+        "sample_local(NULL) must equal sample");
+  CHECK(s2.valid && same_bits(&s2.wo, &s0.wo, sizeof s0.wo) && fabs(s2.weight.g - 0.5 * s0.weight.g) < 1e-15,
+        "a halved reflectance halves the weight (%g vs %g)", s2.weight.g, s0.weight.g);
+  /* A local sigma and roughness change the medium the phase function sees. */
+  mf_local_params rough;
+  memset(&rough, 0, sizeof rough);
+  rough.set = MF_LOCAL_ALPHA;
+  rough.alpha = v3(0.9, 0.9, 0.9);
+  EXPECT_OK(mf_phase_eval_pdf_local(m, &rough, &fr, wi, wo, &local));
+  CHECK(local.pdf != plain.pdf, "a local roughness must change the phase function");
+
+  /* Bad local parameters and bad fields: statuses and messages, outputs untouched. */
+  mf_local_params bad = scale;
+  bad.reflectance_scale = (mf_rgb){3, 3, 3};
+  memset(&half, 0xA5, sizeof half);
+  local = half;
+  EXPECT_STATUS(mf_phase_eval_pdf_local(m, &bad, &fr, wi, wo, &half), MF_ERROR_INVALID_ARGUMENT, "outside [0, 1]");
+  bad = rough;
+  bad.alpha.x = NAN;
+  EXPECT_STATUS(mf_phase_eval_pdf_local(m, &bad, &fr, wi, wo, &half), MF_ERROR_INVALID_ARGUMENT, "alpha");
+  bad.set = 0x40;
+  EXPECT_STATUS(mf_phase_sample_local(m, &bad, &fr, wi, u, &s2), MF_ERROR_INVALID_ARGUMENT, "unknown bits");
+  memset(&bad, 0, sizeof bad);
+  bad.set = MF_LOCAL_ANISOTROPY;
+  bad.anisotropy[0] = 1, bad.anisotropy[1] = -1, bad.anisotropy[2] = 1;
+  EXPECT_STATUS(mf_phase_eval_pdf_local(m, &bad, &fr, wi, wo, &half), MF_ERROR_INVALID_ARGUMENT, "positive definite");
+  CHECK(same_bits(&half, &local, sizeof half), "a failed _local call wrote its out-parameter");
+  const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, 1};
+  mf_collision c;
+  host_field failing = {2, 0}, negative = {3, 0}, unknown = {4, 0};
+  EXPECT_STATUS(mf_track_free_flight(m, sphere, field, &failing, &q, &c), MF_ERROR_CALLBACK, "returned 7");
+  EXPECT_STATUS(mf_track_free_flight(m, sphere, field, &negative, &q, &c), MF_ERROR_INVALID_VALUE, "sigma");
+  EXPECT_STATUS(mf_track_free_flight(m, sphere, field, &unknown, &q, &c), MF_ERROR_INVALID_ARGUMENT, "unknown bits");
+  CHECK(failing.calls == 1 && negative.calls == 1, "a bad field answer must be reported at once");
+
+  mf_field_free(field);
+  mf_field_free(own);
+  mf_field_free(NULL);
+  mf_surface_free(sphere);
+  mf_medium_free(m);
+}
+
 int main(void) {
   test_last_error_message(); /* first: checks the fresh-thread state */
   test_version_and_status();
@@ -1547,6 +1695,7 @@ int main(void) {
   test_bad_query_arguments();
   test_gpis();
   test_surfaces_and_tracking();
+  test_fields();
   if (g_failures) {
     fprintf(stderr, "abi_test: %d of %d checks FAILED\n", g_failures, g_checks);
     return 1;

@@ -185,6 +185,12 @@ typedef struct mf_surface_point {
    * Direction of `alpha_u` (made orthogonal to `normal` by the library).
    */
   struct mf_vec3 tangent;
+  /**
+   * Texture coordinates of the closest point of the mean surface (for fields painted over
+   * the surface; a host surface may leave them at the 0 the library sets before the call).
+   */
+  double u;
+  double v;
 } mf_surface_point;
 
 /**

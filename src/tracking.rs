@@ -243,12 +243,12 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         stats.surface_queries += 1;
         let point = point?;
         let len = point.normal.length();
-        if point.f.is_nan() || !point.normal.is_finite() || (len - 1.0).abs() > NORMAL_TOLERANCE || !point.tangent.is_finite() {
+        if point.f.is_nan() || !point.normal.is_finite() || (len - 1.0).abs() > NORMAL_TOLERANCE || !point.tangent.is_finite() || !point.uv.is_finite() {
             return Err(Error::new(
                 ErrorKind::InvalidArgument,
                 format!(
-                    "the mean surface at {p} returned f = {}, normal {} (length {len}), tangent {}: f must not be NaN, the normal must be unit, the tangent finite",
-                    point.f, point.normal, point.tangent
+                    "the mean surface at {p} returned f = {}, normal {} (length {len}), tangent {}, uv {}: f must not be NaN, the normal must be unit, the tangent and uv finite",
+                    point.f, point.normal, point.tangent, point.uv
                 ),
             ));
         }

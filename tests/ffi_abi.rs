@@ -414,7 +414,7 @@ fn gpis_trace_equals_the_core_for_the_same_seed() {
 
 /// A plane `z = 0.3` (interior below) implemented with C callbacks, for the callback surface.
 unsafe extern "C" fn plane_point(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
-    unsafe { *out = mf_surface_point { f: p.z - 0.3, normal: v(DVec3::Z), tangent: v(DVec3::X) } };
+    unsafe { *out = mf_surface_point { f: p.z - 0.3, normal: v(DVec3::Z), tangent: v(DVec3::X), u: p.x, v: p.y } };
     0
 }
 
@@ -530,7 +530,7 @@ struct PlaneSurface;
 impl macrofacet::surface::MeanSurface for PlaneSurface {
     type Cache = ();
     fn point(&self, p: DVec3) -> macrofacet::Result<macrofacet::surface::SurfacePoint> {
-        Ok(macrofacet::surface::SurfacePoint { f: p.z - 0.3, normal: DVec3::Z, tangent: DVec3::X })
+        Ok(macrofacet::surface::SurfacePoint { f: p.z - 0.3, normal: DVec3::Z, tangent: DVec3::X, uv: glam::DVec2::new(p.x, p.y) })
     }
     fn bound(&self, start: &macrofacet::surface::SurfacePoint, p: DVec3, d: DVec3, length: f64, _: f64, _: &mut ()) -> macrofacet::Result<macrofacet::surface::SegmentBound> {
         let end = self.point(p + length * d)?;

@@ -650,3 +650,27 @@ fn a_field_of_the_medium_s_own_values_changes_nothing() {
         }
     }
 }
+
+#[test]
+fn surface_points_carry_mitsuba_uv() {
+    // Issue 12: fields painted over the mean surface read Mitsuba's uv at the closest point —
+    // interpolated texture coordinates on meshes (barycentrics without them), the polar angle
+    // and azimuth about the pole on spheres.
+    let octa: Vec<DVec3> = [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z].into();
+    let tris = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    let uvs: Vec<DVec2> = (0..6).map(|i| DVec2::new(0.1 * i as f64, 1.0 - 0.15 * i as f64)).collect();
+    let with_uv = TriangleMesh::new(&octa, &tris, None, Some(&uvs)).unwrap();
+    let without = TriangleMesh::new(&octa, &tris, None, None).unwrap();
+    // Above the centroid of face (0, 2, 4): barycentrics 1/3 each.
+    let p = (DVec3::X + DVec3::Y + DVec3::Z) / 3.0 * 1.2;
+    let expect = (uvs[0] + uvs[2] + uvs[4]) / 3.0;
+    assert!((with_uv.point(p).unwrap().uv - expect).length() < 1e-12);
+    assert!((without.point(p).unwrap().uv - DVec2::splat(1.0 / 3.0)).length() < 1e-12);
+    let sphere = Sphere::new(DVec3::new(1.0, 2.0, 3.0), 0.5, false, DVec3::Z).unwrap();
+    let (x_axis, y_axis) = DVec3::Z.any_orthonormal_pair();
+    let at = |theta: f64, phi: f64| sphere.point(sphere.center + 0.7 * (theta.sin() * (phi.cos() * x_axis + phi.sin() * y_axis) + theta.cos() * DVec3::Z)).unwrap().uv;
+    for (theta, phi) in [(0.3, 0.4), (1.2, 2.9), (2.8, 4.0), (1.5707963267948966, 6.0)] {
+        let uv = at(theta, phi);
+        assert!((uv - DVec2::new(phi / std::f64::consts::TAU, theta / std::f64::consts::PI)).length() < 1e-12, "({theta}, {phi}): {uv}");
+    }
+}

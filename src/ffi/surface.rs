@@ -39,6 +39,10 @@ pub struct mf_surface_point {
     pub normal: mf_vec3,
     /// Direction of `alpha_u` (made orthogonal to `normal` by the library).
     pub tangent: mf_vec3,
+    /// Texture coordinates of the closest point of the mean surface (for fields painted over
+    /// the surface; a host surface may leave them at the 0 the library sets before the call).
+    pub u: f64,
+    pub v: f64,
 }
 
 /// Conservative bounds along the segment `p + s d`, `s ∈ [0, length]`: `f` lies between the
@@ -149,13 +153,13 @@ fn callback_failed(what: &str, code: i32) -> Error {
 
 impl From<mf_surface_point> for SurfacePoint {
     fn from(p: mf_surface_point) -> SurfacePoint {
-        SurfacePoint { f: p.f, normal: p.normal.into(), tangent: p.tangent.into() }
+        SurfacePoint { f: p.f, normal: p.normal.into(), tangent: p.tangent.into(), uv: DVec2::new(p.u, p.v) }
     }
 }
 
 impl From<SurfacePoint> for mf_surface_point {
     fn from(p: SurfacePoint) -> mf_surface_point {
-        mf_surface_point { f: p.f, normal: p.normal.into(), tangent: p.tangent.into() }
+        mf_surface_point { f: p.f, normal: p.normal.into(), tangent: p.tangent.into(), u: p.uv.x, v: p.uv.y }
     }
 }
 
@@ -163,7 +167,7 @@ impl MeanSurface for CallbackSurface {
     type Cache = ();
 
     fn point(&self, p: DVec3) -> Result<SurfacePoint> {
-        let mut out = mf_surface_point { f: f64::NAN, normal: DVec3::ZERO.into(), tangent: DVec3::ZERO.into() };
+        let mut out = mf_surface_point { f: f64::NAN, normal: DVec3::ZERO.into(), tangent: DVec3::ZERO.into(), u: 0.0, v: 0.0 };
         // SAFETY: the host registered a callable function; it writes one mf_surface_point.
         let code = unsafe { (self.callbacks.point)(self.user_data, p.into(), &mut out) };
         if code != 0 {

@@ -24,7 +24,7 @@ pub use mesh::TriangleMesh;
 pub use sphere::Sphere;
 
 use crate::error::{Error, ErrorKind, Result};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 /// What a mean surface knows at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,6 +36,9 @@ pub struct SurfacePoint {
     /// Direction of `alpha_u`; made orthogonal to `normal` by the frame (any vector, even zero,
     /// for isotropic roughness).
     pub tangent: DVec3,
+    /// Texture coordinates of the closest point of the mean surface (Mitsuba's `uv`), for
+    /// parameters painted over the surface.
+    pub uv: DVec2,
 }
 
 /// Conservative bounds along the segment `p + s d`, `s ∈ [0, length]`:

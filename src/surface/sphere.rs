@@ -5,7 +5,8 @@
 use super::{convex_bound, Aabb, Curvature, MeanSurface, SegmentBound, SurfacePoint};
 use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::frame::check_finite_vector;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
+use std::f64::consts::{PI, TAU};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
@@ -43,7 +44,13 @@ impl MeanSurface for Sphere {
         let r = v.length();
         // At the centre every direction is a gradient; any unit vector keeps the frame valid.
         let outward = if r > 0.0 { v / r } else { self.pole };
-        Ok(SurfacePoint { f: self.sign() * (r - self.radius), normal: self.sign() * outward, tangent: self.pole.cross(v) })
+        // Mitsuba's sphere uv (azimuth / 2π, polar angle / π) about the pole, the azimuth measured
+        // from the first vector of the pole's Duff et al. basis.
+        let (x_axis, y_axis) = self.pole.any_orthonormal_pair();
+        let azimuth = v.dot(y_axis).atan2(v.dot(x_axis));
+        let u = if azimuth < 0.0 { azimuth / TAU + 1.0 } else { azimuth / TAU };
+        let uv = DVec2::new(u, outward.dot(self.pole).clamp(-1.0, 1.0).acos() / PI);
+        Ok(SurfacePoint { f: self.sign() * (r - self.radius), normal: self.sign() * outward, tangent: self.pole.cross(v), uv })
     }
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {

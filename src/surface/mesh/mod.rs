@@ -193,6 +193,7 @@ impl TriangleMesh {
                         }
                     }),
                     dpdu: dpdu(&p, n, uvs.map(|uv| tri.map(|v| uv[v as usize]))),
+                    uv: uvs.map(|uv| tri.map(|v| uv[v as usize])),
                     centre: (p[0] + p[1] + p[2]) / 3.0,
                     radius: p.iter().map(|v| (*v - (p[0] + p[1] + p[2]) / 3.0).length()).fold(0.0, f64::max),
                 }
@@ -261,7 +262,14 @@ impl TriangleMesh {
             (None, _) if distance > self.epsilon => sign * offset / distance,
             (None, _) => pseudo,
         };
-        SurfacePoint { f: sign * distance, normal, tangent: tri.dpdu }
+        // Mitsuba's uv: the texture coordinates interpolated at the closest point, else the
+        // barycentric coordinates of corners 1 and 2.
+        let b = c.barycentric;
+        let uv = match tri.uv {
+            Some(uv) => b.x * uv[0] + b.y * uv[1] + b.z * uv[2],
+            None => DVec2::new(b.y, b.z),
+        };
+        SurfacePoint { f: sign * distance, normal, tangent: tri.dpdu, uv }
     }
 
     /// The range of `d·n` over the interpolated vertex normals `n = m/|m|`, `m = Σ b_i n_i`,

@@ -2,7 +2,7 @@
 //! Collision Detection*, 5.1.5), with the feature (face, edge, corner) the point lies on, which
 //! decides the pseudo-normal that signs the distance (Bærentzen & Aanæs 2005).
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 /// Where on a triangle the closest point lies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,6 +30,8 @@ pub(super) struct Triangle {
     pub shading_lipschitz: f64,
     /// Mitsuba's `dp/du` for this triangle.
     pub dpdu: DVec3,
+    /// Texture coordinates of the corners, when the mesh has them.
+    pub uv: Option<[DVec2; 3]>,
     /// A bounding sphere (centre, radius): a cheap lower bound of the distance.
     pub centre: DVec3,
     pub radius: f64,

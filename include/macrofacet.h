@@ -487,6 +487,21 @@ typedef struct mf_mesh {
 } mf_mesh;
 
 /**
+ * A signed-distance grid for [`mf_surface_new_grid`] (Mitsuba 3's `sdfgrid`): `nx × ny × nz`
+ * samples (each at least 2) at the corners of a regular grid over the unit cube of object
+ * space, `x` fastest then `y` then `z` (the order of Mitsuba's `.vol` files), in object units;
+ * `to_world` (row-major 3×4: linear part and translation) must be a rotation times a uniform
+ * scale. Every sample on the grid's outer faces must be positive (the surface lies inside).
+ */
+typedef struct mf_grid {
+  const float *values;
+  size_t nx;
+  size_t ny;
+  size_t nz;
+  double to_world[12];
+} mf_grid;
+
+/**
  * One tracking query: the ray `origin + t d` (`d` unit, world space), `t ∈ [0, t_max]`
  * (`t_max` may be `+inf`), inside the medium's region; `seed` drives the call's random numbers.
  */
@@ -936,6 +951,14 @@ enum mf_status mf_surface_new_sphere(struct mf_vec3 center,
  * `mesh` must be NULL or valid, its arrays valid for the sizes it states.
  */
 enum mf_status mf_surface_new_mesh(const struct mf_mesh *mesh, struct mf_surface **out_surface);
+
+/**
+ * Creates a signed-distance-grid surface (trilinear; see [`mf_grid`]). The values are copied.
+ *
+ * # Safety
+ * `grid` must be NULL or valid, `grid->values` valid for `nx * ny * nz` reads.
+ */
+enum mf_status mf_surface_new_grid(const struct mf_grid *grid, struct mf_surface **out_surface);
 
 /**
  * Releases a surface; NULL is a no-op.

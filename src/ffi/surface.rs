@@ -16,8 +16,8 @@
 use super::medium::mf_vec3;
 use super::{arg, boundary, free_handle, into_handle, mf_status, out, FfiError, FfiResult};
 use crate::error::{Error, ErrorKind, Result};
-use crate::surface::{convex_bound, enclosure, Aabb, Curvature, Enclosure, MeanSurface, SegmentBound, Sphere, SurfacePoint, TriangleMesh};
-use glam::{DVec2, DVec3};
+use crate::surface::{convex_bound, enclosure, Aabb, Curvature, Enclosure, GridSurface, MeanSurface, SegmentBound, Sphere, SurfacePoint, TriangleMesh};
+use glam::{DMat3, DVec2, DVec3};
 use std::ffi::c_void;
 
 /// [`mf_surface_callbacks::shape`]: no known curvature; without a bound callback the tracker
@@ -114,6 +114,21 @@ pub struct mf_mesh {
     pub uvs: *const f64,
 }
 
+/// A signed-distance grid for [`mf_surface_new_grid`] (Mitsuba 3's `sdfgrid`): `nx × ny × nz`
+/// samples (each at least 2) at the corners of a regular grid over the unit cube of object
+/// space, `x` fastest then `y` then `z` (the order of Mitsuba's `.vol` files), in object units;
+/// `to_world` (row-major 3×4: linear part and translation) must be a rotation times a uniform
+/// scale. Every sample on the grid's outer faces must be positive (the surface lies inside).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct mf_grid {
+    pub values: *const f32,
+    pub nx: usize,
+    pub ny: usize,
+    pub nz: usize,
+    pub to_world: [f64; 12],
+}
+
 /// A mean surface. Immutable and safe to share between threads (the callbacks of a callback
 /// surface must then be thread-safe, or be given per-thread `user_data`).
 pub struct mf_surface {
@@ -123,6 +138,7 @@ pub struct mf_surface {
 pub(crate) enum SurfaceKind {
     Sphere(Sphere),
     Mesh(Box<TriangleMesh>),
+    Grid(Box<GridSurface>),
     Callbacks(Callbacks),
 }
 
@@ -294,6 +310,29 @@ pub unsafe extern "C" fn mf_surface_new_mesh(mesh: *const mf_mesh, out_surface: 
     })
 }
 
+/// Creates a signed-distance-grid surface (trilinear; see [`mf_grid`]). The values are copied.
+///
+/// # Safety
+/// `grid` must be NULL or valid, `grid->values` valid for `nx * ny * nz` reads.
+#[no_mangle]
+pub unsafe extern "C" fn mf_surface_new_grid(grid: *const mf_grid, out_surface: *mut *mut mf_surface) -> mf_status {
+    boundary(|| {
+        let g = arg(grid, "grid")?;
+        let slot = out(out_surface, "out_surface")?;
+        let count = g.nx.checked_mul(g.ny).and_then(|n| n.checked_mul(g.nz)).ok_or_else(|| invalid(format!("grid dimensions {} x {} x {} are too large", g.nx, g.ny, g.nz)))?;
+        if g.values.is_null() {
+            return Err(FfiError::null("grid->values"));
+        }
+        // SAFETY: non-NULL, and the caller promises nx * ny * nz readable floats.
+        let values = unsafe { std::slice::from_raw_parts(g.values, count) };
+        let m = g.to_world;
+        let linear = DMat3::from_cols(DVec3::new(m[0], m[4], m[8]), DVec3::new(m[1], m[5], m[9]), DVec3::new(m[2], m[6], m[10]));
+        let surface = GridSurface::new(values, [g.nx, g.ny, g.nz], linear, DVec3::new(m[3], m[7], m[11])).map_err(|e| Error::new(e.kind, format!("grid: {}", e.message)))?;
+        *slot = into_handle(mf_surface { inner: SurfaceKind::Grid(Box::new(surface)) });
+        Ok(())
+    })
+}
+
 /// Releases a surface; NULL is a no-op.
 ///
 /// # Safety
@@ -309,6 +348,7 @@ pub(crate) fn with_surface<R>(surface: &mf_surface, user_data: *mut c_void, body
     match &surface.inner {
         SurfaceKind::Sphere(s) => body.visit(s),
         SurfaceKind::Mesh(m) => body.visit(m.as_ref()),
+        SurfaceKind::Grid(g) => body.visit(g.as_ref()),
         SurfaceKind::Callbacks(c) => body.visit(&CallbackSurface::new(*c, user_data)),
     }
 }
@@ -362,6 +402,7 @@ pub unsafe extern "C" fn mf_surface_bounding_box(surface: *const mf_surface, out
         let b = match &s.inner {
             SurfaceKind::Sphere(x) => x.bounding_box(),
             SurfaceKind::Mesh(x) => x.bounding_box(),
+            SurfaceKind::Grid(x) => x.bounding_box(),
             SurfaceKind::Callbacks(c) => c.bounds,
         };
         *min_slot = b.min.into();

@@ -11,15 +11,19 @@
 //!   bound of a signed-distance function ([`SegmentBound::lipschitz`]); tighter answers make
 //!   tracking cheaper, never biased.
 //!
-//! SDF sign (design notes): `f > 0` outside, `f < 0` inside. Every `f` here is 1-Lipschitz.
+//! SDF sign (design notes): `f > 0` outside, `f < 0` inside. Every `f` here is 1-Lipschitz except
+//! an interpolated grid's, which says how far from it it strays ([`MeanSurface::clearance`],
+//! [`MeanSurface::bound`]).
 
 mod convex;
 mod enclosure;
+mod grid;
 mod mesh;
 mod sphere;
 
 pub use convex::{convex_bound, Curvature};
 pub use enclosure::{enclosure, Enclosure};
+pub use grid::GridSurface;
 pub use mesh::TriangleMesh;
 pub use sphere::Sphere;
 

@@ -1511,6 +1511,45 @@ static void test_surfaces_and_tracking(void) {
   CHECK(s == (mf_surface *)0x1, "a failed mf_surface_new_* wrote its out-parameter");
   EXPECT_STATUS(mf_surface_eval(sphere, NULL, v3(INFINITY, 0, 0), &a), MF_ERROR_INVALID_ARGUMENT, "p must be finite");
 
+  /* A signed-distance grid (Mitsuba's sdfgrid layout): a sphere of radius 0.3 in the unit cube,
+   * scaled by 2 and moved; queries near its surface follow the sphere, a ray through it
+   * collides, and grids that are not distances are refused. */
+  {
+    enum { N = 16 };
+    static float values[N * N * N];
+    for (int z = 0; z < N; ++z)
+      for (int y = 0; y < N; ++y)
+        for (int x = 0; x < N; ++x) {
+          const double px = x / (N - 1.0) - 0.5, py = y / (N - 1.0) - 0.5, pz = z / (N - 1.0) - 0.5;
+          values[(z * N + y) * N + x] = (float)(sqrt(px * px + py * py + pz * pz) - 0.3);
+        }
+    mf_grid g = {values, N, N, N, {2, 0, 0, -1, 0, 2, 0, -1, 0, 0, 2, -1}};
+    mf_surface *grid = NULL;
+    EXPECT_OK(mf_surface_new_grid(&g, &grid));
+    mf_surface_point gp;
+    EXPECT_OK(mf_surface_eval(grid, NULL, v3(0.65, 0, 0), &gp));
+    CHECK_ABS(gp.f, 0.05, 8e-3); /* trilinear error h²/8 × 2/|x| with h = 2/15 */
+    CHECK(gp.normal.x > 0.99, "grid normal (%g, %g, %g)", gp.normal.x, gp.normal.y, gp.normal.z);
+    const mf_track_query gq = {v3(-3, 0.01, 0.02), v3(1, 0, 0), INFINITY, 3};
+    EXPECT_OK(mf_track_free_flight(m, grid, NULL, NULL, &gq, &c1));
+    CHECK(c1.scattered && c1.stats.majorant_violations == 0, "a ray into the grid sphere scatters");
+    mf_surface *g2 = (mf_surface *)0x1;
+    mf_grid skew = g;
+    skew.to_world[0] = 3;
+    EXPECT_STATUS(mf_surface_new_grid(&skew, &g2), MF_ERROR_INVALID_ARGUMENT, "uniform scale");
+    mf_grid open_grid = g;
+    open_grid.nx = 1;
+    EXPECT_STATUS(mf_surface_new_grid(&open_grid, &g2), MF_ERROR_INVALID_ARGUMENT, "dimensions");
+    mf_grid no_values = g;
+    no_values.values = NULL;
+    EXPECT_STATUS(mf_surface_new_grid(&no_values, &g2), MF_ERROR_NULL_POINTER, "grid->values");
+    values[0] = -1;
+    EXPECT_STATUS(mf_surface_new_grid(&g, &g2), MF_ERROR_INVALID_ARGUMENT, "inside the grid");
+    values[0] = 1;
+    CHECK(g2 == (mf_surface *)0x1, "a failed mf_surface_new_grid wrote its out-parameter");
+    mf_surface_free(grid);
+  }
+
   /* The enclosure of the shell around the octahedron: a closed, non-empty mesh. */
   mf_enclosure *e = NULL;
   EXPECT_OK(mf_surface_enclosure(mesh, NULL, top, 0.0, &e));

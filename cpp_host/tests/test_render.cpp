@@ -8,6 +8,8 @@
 //    grey medium each sample is a Bernoulli(T) outcome, SE = sqrt(T(1−T)/(spp·pixels))).
 //    The shadow-ray transmittance through the same slab is analytic: checked to 1e-5 relative.
 //  * Determinism: same seed → bit-identical EXR files, with 1 and 2 threads alike.
+//  * Default BSDF: an area light without <bsdf> reflects nothing (Mitsuba: black diffuse): exactly
+//    its radiance under an environment; a plain shape without one is diffuse 0.5.
 #include <unistd.h>
 
 #include <vector>
@@ -244,6 +246,32 @@ TEST_CASE(analytic_direct_lighting) {
     CHECK_MSG(std::fabs(st.mean[0] - 0.4) < 4.5 * st.se[0] + 1e-4,
               "area light: " + std::to_string(st.mean[0]) + " vs 0.4 (se " + std::to_string(st.se[0]) + ")");
     std::printf("  area light: %.5f (expected 0.4, se %.5f)\n", st.mean[0], st.se[0]);
+}
+
+TEST_CASE(emitter_default_bsdf) {
+    // Mitsuba 3 gives a shape without a <bsdf> a diffuse BSDF of reflectance 0.5, but a black one
+    // when the shape is an area emitter (Shape's constructor). A rectangle facing the camera under
+    // a constant environment of radiance E (volpath, unoccluded hemisphere) therefore renders as
+    //  * an area light of radiance L: exactly L in every pixel (nothing reflected, no noise);
+    //    mfrender used to give it the 0.5 diffuse, i.e. L + 0.5 E, which made every path that
+    //    reaches the light's front after a bounce brighter than Mitsuba (+0.15 % on a scattering
+    //    sphere beside the light, 20 SE);
+    //  * a plain rectangle: 0.5 E (diffuse 0.5 under radiance E); tolerance 4.5 SE.
+    auto rectangle = [&](const std::string& name, const std::string& emitter) {
+        return render(name, "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(3.0f, 20.0f, 8, 8, 64) +
+                                R"(<shape type="rectangle"><transform name="to_world"><scale value="2"/></transform>)" +
+                                emitter + R"(</shape><emitter type="constant"><rgb name="radiance" value="1"/></emitter></scene>)");
+    };
+    Image light = rectangle("default_bsdf_light", R"(<emitter type="area"><rgb name="radiance" value="2"/></emitter>)");
+    Stats sl = stats(light, 2.0);
+    CHECK_MSG(sl.maxdev < 1e-6, "area light without a BSDF: max |pixel - 2| = " + std::to_string(sl.maxdev) +
+                                    " (mean " + std::to_string(sl.mean[0]) + ")");
+    Image plain = rectangle("default_bsdf_plain", "");
+    Stats sp = stats(plain, 0.5);
+    for (int c = 0; c < 3; ++c)
+        CHECK_MSG(std::fabs(sp.mean[c] - 0.5) < 4.5 * sp.se[c] + 1e-4,
+                  "rectangle without a BSDF: channel " + std::to_string(c) + " mean " + std::to_string(sp.mean[c]) + " vs 0.5");
+    std::printf("  area light: max |dev| %.2e; plain rectangle: %.5f (expected 0.5, se %.5f)\n", sl.maxdev, sp.mean[0], sp.se[0]);
 }
 
 TEST_MAIN()

@@ -55,6 +55,23 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     int null_crossings = 0;
     GpisStart gpis_start;     // where the next gpis segment starts (free, or on the last crossing)
 
+    // MIS weights of the two ways to reach a non-delta emitter from a non-delta vertex
+    // (LightSampling): next-event estimation (light_pdf) and BSDF / phase sampling (scatter_pdf).
+    // Delta emitters are reached by NEE only (weight 1 whatever the setting).
+    const bool nee_non_delta = cfg.light_sampling != LightSampling::BsdfOnly;
+    auto nee_weight = [&](float light_pdf, float scatter_pdf) {
+        return cfg.light_sampling == LightSampling::Mis ? power_heuristic(light_pdf, scatter_pdf) : 1.0f;
+    };
+    auto hit_weight = [&](float light_pdf) {
+        if (prev_delta) return 1.0f;  // the camera or a Dirac lobe: emitter sampling cannot find this path
+        switch (cfg.light_sampling) {
+            case LightSampling::Mis: return power_heuristic(prev_pdf, light_pdf);
+            case LightSampling::BsdfOnly: return 1.0f;
+            case LightSampling::EmitterOnly: break;
+        }
+        return 0.0f;
+    };
+
     // Next-event estimation: uniform emitter choice, MIS against eval_pdf.
     auto direct = [&](const Vec3& origin, const Medium* m, const Vec3& ref, auto&& eval) -> Rgb {
         if (emitters.empty()) return Rgb(0.0f);
@@ -62,7 +79,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         Vec2 u = sampler.next_2d();
         EmitterSample es;
         if (!emitters[idx]->sample_li(ref, u, &es)) return Rgb(0.0f);
-        if (es.Li.is_black() || !(es.pdf > 0)) return Rgb(0.0f);
+        if (es.Li.is_black() || !(es.pdf > 0) || (!es.delta && !nee_non_delta)) return Rgb(0.0f);
         float f_pdf = 0.0f;
         Rgb f = eval(es.wi, &f_pdf);
         if (f.is_black()) return Rgb(0.0f);
@@ -70,7 +87,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler);
         if (T.is_black()) return Rgb(0.0f);
         float light_pdf = es.pdf * sel_pdf;
-        float w = es.delta ? 1.0f : power_heuristic(light_pdf, f_pdf);
+        float w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);
         return f * es.Li * T * (w / light_pdf);
     };
 
@@ -158,7 +175,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 for (const Emitter* e : scene_.infinite_emitters()) {
                     Rgb Le = e->eval_direction(ray.d);
                     if (Le.is_black()) continue;
-                    float w = prev_delta ? 1.0f : power_heuristic(prev_pdf, e->pdf_direction(ray.d) * sel_pdf);
+                    float w = hit_weight(e->pdf_direction(ray.d) * sel_pdf);
                     L += throughput() * Le * w;
                 }
             }
@@ -170,7 +187,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         if (shape->emitter && !(cfg.hide_emitters && depth == 0)) {
             Rgb Le = shape->emitter->eval_surface(hit, -ray.d);
             if (!Le.is_black()) {
-                float w = prev_delta ? 1.0f : power_heuristic(prev_pdf, shape->emitter->pdf_surface(prev_p, hit) * sel_pdf);
+                float w = hit_weight(shape->emitter->pdf_surface(prev_p, hit) * sel_pdf);
                 L += throughput() * Le * w;
             }
         }
@@ -196,7 +213,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             size_t idx = std::min(size_t(sampler.next_1d() * float(emitters.size())), emitters.size() - 1);
             Vec2 u = sampler.next_2d();
             EmitterSample es;
-            if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0) {
+            if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0 && (es.delta || nee_non_delta)) {
                 Vec3 wi_l = frame.to_local(es.wi);
                 Rgb f = bsdf.eval(hit.uv, wo_l, wi_l);
                 if (!f.is_black()) {
@@ -208,7 +225,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                     Rgb T = shadow_transmittance(o, es.wi, dist, vol ? m : nullptr, sampler);
                     if (!T.is_black()) {
                         float light_pdf = es.pdf * sel_pdf;
-                        float w = es.delta ? 1.0f : power_heuristic(light_pdf, f_pdf);
+                        float w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);
                         L += throughput() * f * es.Li * T * (w / light_pdf);
                     }
                 }

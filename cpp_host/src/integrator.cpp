@@ -1,8 +1,6 @@
 // mfhost — volumetric path tracer (see integrator.h).
 #include "integrator.h"
 
-#include "medium_gpis.h"
-
 namespace mf {
 
 namespace {
@@ -53,7 +51,8 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     float prev_pdf = 0.0f;    // its solid-angle pdf
     Vec3 prev_p = ray.o;      // where it was sampled
     int null_crossings = 0;
-    GpisStart gpis_start;     // where the next gpis segment starts (free, or on the last crossing)
+    MediumInteraction last_event;    // the last scattering event in a medium
+    bool from_medium_event = false;  // ... and the current ray leaves it (the medium's `from`)
 
     // MIS weights of the two ways to reach a non-delta emitter from a non-delta vertex
     // (LightSampling): next-event estimation (light_pdf) and BSDF / phase sampling (scatter_pdf).
@@ -103,42 +102,14 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         SurfaceHit hit;
         bool found = scene_.intersect(ray, &hit);
 
-        // ---- gpis region: realize the stochastic surface up to the next surface (the band's
-        // exit or another shape); a crossing is a delta reflection, a miss continues to the
-        // surface. The next segment starts on the crossing (Renewal / Renewal+ memory).
-        if (medium && medium->as_gpis()) {
-            const GpisMedium& g = *medium->as_gpis();
-            GpisHit gh;
-            double tmax = found ? double(hit.t) : double(kInf);
-            if (g.trace(ray.o, ray.d, tmax, gpis_start, sampler.next_u64(), &gh)) {
-                if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
-                Vec3 wi;
-                Rgb w;
-                if (!g.scatter(-ray.d, gh, &wi, &w)) break;
-                beta *= w;
-                if (beta.is_black() || !beta.finite()) break;
-                prev_delta = true;  // a delta lobe: no NEE here, emitters hit next count fully
-                prev_pdf = 0.0f;
-                prev_p = gh.point();
-                gpis_start.on_surface = true;
-                for (int k = 0; k < 3; ++k) {
-                    gpis_start.p[k] = gh.p[k];
-                    gpis_start.gradient[k] = gh.gradient[k];
-                }
-                ray = Ray(gh.point(), wi);
-                ++depth;
-                if (!russian_roulette()) break;
-                continue;
-            }
-        }
-        gpis_start.on_surface = false;  // every other event restarts the realization
-
         // ---- medium: free flight up to the surface (or infinity)
-        if (medium && !medium->as_gpis()) {
+        const MediumInteraction* from = from_medium_event ? &last_event : nullptr;
+        from_medium_event = false;
+        if (medium) {
             MediumInteraction mi;
             Rgb w, pr;
             float tmax = found ? hit.t : kInf;
-            bool scattered = medium->sample_free_flight(ray, tmax, hero, sampler, &mi, &w, &pr);
+            bool scattered = medium->sample_free_flight(ray, tmax, from, hero, sampler, &mi, &w, &pr);
             beta *= w;
             ratio *= pr;
             if (beta.is_black() || !beta.finite() || !(ratio.average() > 0)) break;
@@ -151,18 +122,21 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
                 const PhaseFunction& ph = medium->phase();
                 Vec3 wo = -ray.d;
-                L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {
-                    return ph.eval_pdf(mi, wo, wi, pdf);
-                });
+                if (!ph.is_delta())
+                    L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {
+                        return ph.eval_pdf(mi, wo, wi, pdf);
+                    });
                 Vec3 wi;
                 float pdf;
                 Rgb pw;
                 if (!ph.sample(mi, wo, sampler, &wi, &pdf, &pw)) break;
                 beta *= pw;
-                prev_delta = false;
+                prev_delta = ph.is_delta();
                 prev_pdf = pdf;
                 prev_p = mi.p;
                 ray = Ray(mi.p, wi);
+                last_event = mi;
+                from_medium_event = true;
                 ++depth;
                 if (!russian_roulette()) break;
                 continue;

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "image_io.h"
+#include "library_abi.h"
 #include "mean_surface.h"
 #include "medium_gpis.h"
 #include "medium_macrofacet.h"

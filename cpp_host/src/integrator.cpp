@@ -1,8 +1,6 @@
 // mfhost — volumetric path tracer (see integrator.h).
 #include "integrator.h"
 
-#include "medium_gpis.h"
-
 namespace mf {
 
 namespace {
@@ -53,7 +51,25 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     float prev_pdf = 0.0f;    // its solid-angle pdf
     Vec3 prev_p = ray.o;      // where it was sampled
     int null_crossings = 0;
-    GpisStart gpis_start;     // where the next gpis segment starts (free, or on the last crossing)
+    MediumInteraction last_event;    // the last scattering event in a medium
+    bool from_medium_event = false;  // ... and the current ray leaves it (the medium's `from`)
+
+    // MIS weights of the two ways to reach a non-delta emitter from a non-delta vertex
+    // (LightSampling): next-event estimation (light_pdf) and BSDF / phase sampling (scatter_pdf).
+    // Delta emitters are reached by NEE only (weight 1 whatever the setting).
+    const bool nee_non_delta = cfg.light_sampling != LightSampling::BsdfOnly;
+    auto nee_weight = [&](float light_pdf, float scatter_pdf) {
+        return cfg.light_sampling == LightSampling::Mis ? power_heuristic(light_pdf, scatter_pdf) : 1.0f;
+    };
+    auto hit_weight = [&](float light_pdf) {
+        if (prev_delta) return 1.0f;  // the camera or a Dirac lobe: emitter sampling cannot find this path
+        switch (cfg.light_sampling) {
+            case LightSampling::Mis: return power_heuristic(prev_pdf, light_pdf);
+            case LightSampling::BsdfOnly: return 1.0f;
+            case LightSampling::EmitterOnly: break;
+        }
+        return 0.0f;
+    };
 
     // Next-event estimation: uniform emitter choice, MIS against eval_pdf.
     auto direct = [&](const Vec3& origin, const Medium* m, const Vec3& ref, auto&& eval) -> Rgb {
@@ -62,7 +78,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         Vec2 u = sampler.next_2d();
         EmitterSample es;
         if (!emitters[idx]->sample_li(ref, u, &es)) return Rgb(0.0f);
-        if (es.Li.is_black() || !(es.pdf > 0)) return Rgb(0.0f);
+        if (es.Li.is_black() || !(es.pdf > 0) || (!es.delta && !nee_non_delta)) return Rgb(0.0f);
         float f_pdf = 0.0f;
         Rgb f = eval(es.wi, &f_pdf);
         if (f.is_black()) return Rgb(0.0f);
@@ -70,7 +86,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler);
         if (T.is_black()) return Rgb(0.0f);
         float light_pdf = es.pdf * sel_pdf;
-        float w = es.delta ? 1.0f : power_heuristic(light_pdf, f_pdf);
+        float w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);
         return f * es.Li * T * (w / light_pdf);
     };
 
@@ -86,42 +102,14 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         SurfaceHit hit;
         bool found = scene_.intersect(ray, &hit);
 
-        // ---- gpis region: realize the stochastic surface up to the next surface (the band's
-        // exit or another shape); a crossing is a delta reflection, a miss continues to the
-        // surface. The next segment starts on the crossing (Renewal / Renewal+ memory).
-        if (medium && medium->as_gpis()) {
-            const GpisMedium& g = *medium->as_gpis();
-            GpisHit gh;
-            double tmax = found ? double(hit.t) : double(kInf);
-            if (g.trace(ray.o, ray.d, tmax, gpis_start, sampler.next_u64(), &gh)) {
-                if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
-                Vec3 wi;
-                Rgb w;
-                if (!g.scatter(-ray.d, gh, &wi, &w)) break;
-                beta *= w;
-                if (beta.is_black() || !beta.finite()) break;
-                prev_delta = true;  // a delta lobe: no NEE here, emitters hit next count fully
-                prev_pdf = 0.0f;
-                prev_p = gh.point();
-                gpis_start.on_surface = true;
-                for (int k = 0; k < 3; ++k) {
-                    gpis_start.p[k] = gh.p[k];
-                    gpis_start.gradient[k] = gh.gradient[k];
-                }
-                ray = Ray(gh.point(), wi);
-                ++depth;
-                if (!russian_roulette()) break;
-                continue;
-            }
-        }
-        gpis_start.on_surface = false;  // every other event restarts the realization
-
         // ---- medium: free flight up to the surface (or infinity)
-        if (medium && !medium->as_gpis()) {
+        const MediumInteraction* from = from_medium_event ? &last_event : nullptr;
+        from_medium_event = false;
+        if (medium) {
             MediumInteraction mi;
             Rgb w, pr;
             float tmax = found ? hit.t : kInf;
-            bool scattered = medium->sample_free_flight(ray, tmax, hero, sampler, &mi, &w, &pr);
+            bool scattered = medium->sample_free_flight(ray, tmax, from, hero, sampler, &mi, &w, &pr);
             beta *= w;
             ratio *= pr;
             if (beta.is_black() || !beta.finite() || !(ratio.average() > 0)) break;
@@ -134,18 +122,21 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
                 const PhaseFunction& ph = medium->phase();
                 Vec3 wo = -ray.d;
-                L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {
-                    return ph.eval_pdf(mi, wo, wi, pdf);
-                });
+                if (!ph.is_delta())
+                    L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {
+                        return ph.eval_pdf(mi, wo, wi, pdf);
+                    });
                 Vec3 wi;
                 float pdf;
                 Rgb pw;
                 if (!ph.sample(mi, wo, sampler, &wi, &pdf, &pw)) break;
                 beta *= pw;
-                prev_delta = false;
+                prev_delta = ph.is_delta();
                 prev_pdf = pdf;
                 prev_p = mi.p;
                 ray = Ray(mi.p, wi);
+                last_event = mi;
+                from_medium_event = true;
                 ++depth;
                 if (!russian_roulette()) break;
                 continue;
@@ -158,7 +149,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 for (const Emitter* e : scene_.infinite_emitters()) {
                     Rgb Le = e->eval_direction(ray.d);
                     if (Le.is_black()) continue;
-                    float w = prev_delta ? 1.0f : power_heuristic(prev_pdf, e->pdf_direction(ray.d) * sel_pdf);
+                    float w = hit_weight(e->pdf_direction(ray.d) * sel_pdf);
                     L += throughput() * Le * w;
                 }
             }
@@ -170,7 +161,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         if (shape->emitter && !(cfg.hide_emitters && depth == 0)) {
             Rgb Le = shape->emitter->eval_surface(hit, -ray.d);
             if (!Le.is_black()) {
-                float w = prev_delta ? 1.0f : power_heuristic(prev_pdf, shape->emitter->pdf_surface(prev_p, hit) * sel_pdf);
+                float w = hit_weight(shape->emitter->pdf_surface(prev_p, hit) * sel_pdf);
                 L += throughput() * Le * w;
             }
         }
@@ -196,7 +187,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             size_t idx = std::min(size_t(sampler.next_1d() * float(emitters.size())), emitters.size() - 1);
             Vec2 u = sampler.next_2d();
             EmitterSample es;
-            if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0) {
+            if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0 && (es.delta || nee_non_delta)) {
                 Vec3 wi_l = frame.to_local(es.wi);
                 Rgb f = bsdf.eval(hit.uv, wo_l, wi_l);
                 if (!f.is_black()) {
@@ -208,7 +199,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                     Rgb T = shadow_transmittance(o, es.wi, dist, vol ? m : nullptr, sampler);
                     if (!T.is_black()) {
                         float light_pdf = es.pdf * sel_pdf;
-                        float w = es.delta ? 1.0f : power_heuristic(light_pdf, f_pdf);
+                        float w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);
                         L += throughput() * f * es.Li * T * (w / light_pdf);
                     }
                 }

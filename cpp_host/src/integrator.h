@@ -1,9 +1,11 @@
 // mfhost — unidirectional volumetric path tracer (Mitsuba's `volpath`; `path` ignores media).
 //
 // Next-event estimation to every emitter type, combined with BSDF / phase sampling by the
-// power heuristic; free flights and shadow transmittance are delegated to the current Medium;
-// null-BSDF surfaces are crossed (changing the medium) by both path and shadow rays, any other
-// surface (dielectrics included) blocks shadow rays; Russian roulette from rr_depth.
+// power heuristic (or either alone: IntegratorSettings::light_sampling); free flights, shadow
+// transmittance and scattering are delegated to the current Medium and its phase function, the
+// same way for every medium (a Dirac phase lobe, e.g. a gpis crossing, gets no NEE); null-BSDF
+// surfaces are crossed (changing the medium) by both path and shadow rays, any other surface
+// (dielectrics included) blocks shadow rays; Russian roulette from rr_depth.
 #pragma once
 
 #include "sampler.h"

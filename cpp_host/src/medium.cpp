@@ -44,8 +44,8 @@ bool HenyeyGreenstein::sample(const MediumInteraction&, const Vec3& wo, Sampler&
     return true;
 }
 
-bool HomogeneousMedium::sample_free_flight(const Ray& ray, float t_max, int channel, Sampler& sampler,
-                                           MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const {
+bool HomogeneousMedium::sample_free_flight(const Ray& ray, float t_max, const MediumInteraction*, int channel,
+                                           Sampler& sampler, MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const {
     float ut = sampler.next_1d();
     float sc = sigma_t_[channel];
     float t = sc > 0 ? -std::log1p(-ut) / sc : kInf;

@@ -1,14 +1,19 @@
 // mfhost — participating media and phase functions.
 //
-// The integrator is medium-agnostic: it tracks which Medium the current ray segment is in
-// (through the interior/exterior references of the shapes it crosses) and asks that Medium to
-// sample a free flight or a transmittance along [0, t_max] of the segment, where t_max is the
-// distance to the next surface. How the medium does it is its own business: the homogeneous
-// medium samples exponentials, the macrofacet medium hands the segment to the library's tracker
+// The integrator is medium-agnostic (as in pbrt-v4 and Mitsuba 3's volpath): it tracks which
+// Medium the current ray segment is in (through the interior/exterior references of the shapes
+// it crosses) and asks that Medium to sample a free flight or a transmittance along [0, t_max]
+// of the segment, where t_max is the distance to the next surface, and its phase function to
+// scatter. How the medium does it is its own business: the homogeneous medium samples
+// exponentials; the macrofacet medium hands the segment to the library's tracker
 // (medium_macrofacet.h), which returns the collision with its local frame (MediumInteraction's
-// frame_n / frame_t) for the phase function.
+// frame_n / frame_t) for the phase function; the gpis medium realizes a Gaussian-process surface
+// along the segment (medium_gpis.h): its interaction is a crossing, its phase function a Dirac
+// lobe (is_delta), and a flight that leaves one of its crossings continues that realization's
+// memory (sample_free_flight's `from`).
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <utility>
@@ -22,7 +27,6 @@ namespace mf {
 
 class Medium;
 class Shape;
-class GpisMedium;
 
 struct MediumInteraction {
     Vec3 p;                  // scattering position
@@ -32,6 +36,10 @@ struct MediumInteraction {
     Vec3 frame_t{1, 0, 0};   // optional local tangent (macrofacet media: direction of alpha_u)
     float sdf_f = 0;         // optional: signed distance at p (macrofacet media)
     const Medium* medium = nullptr;
+    /// The medium's own record of the event, opaque to the integrator, which hands the event
+    /// back to the medium as the `from` of the next free flight (and to its phase function):
+    /// the gpis medium keeps the crossing's exact point, normal and sampled gradient here.
+    std::array<double, 9> record{};
 };
 
 class PhaseFunction {
@@ -50,6 +58,9 @@ public:
     /// two, the macrofacet phase MF_PHASE_SAMPLE_DIMENSIONS).
     virtual bool sample(const MediumInteraction& mi, const Vec3& wo, Sampler& sampler, Vec3* wi, float* pdf,
                         Rgb* weight) const = 0;
+    /// A Dirac lobe (eval and pdf are 0, sample gives the direction with *pdf = 0 and the weight):
+    /// no next-event estimation at its events, and emitters reached from them count fully.
+    virtual bool is_delta() const { return false; }
 };
 
 class IsotropicPhase final : public PhaseFunction {
@@ -77,6 +88,9 @@ public:
     virtual ~Medium() = default;
     /// Free-flight sampling along ray (|d| = 1) over [0, t_max] (t_max may be +inf).
     /// Returns true and fills *mi on a real scattering event; false if the flight passed t_max.
+    /// `from` is the event of this path the ray leaves (the previous vertex, when it was a
+    /// scattering event in a medium: the ray starts at from->p), else null (the camera, a surface,
+    /// a boundary crossing). Media without memory ignore it.
     ///
     /// Chromatic media use path-space "hero channel" MIS: the integrator picks `channel` once
     /// per path; distances are sampled with that channel's extinction. The medium returns
@@ -87,15 +101,12 @@ public:
     /// The integrator multiplies both along the path and divides the throughput by the average
     /// of the pdf-ratio product (one-sample balance heuristic over the hero choice), which keeps
     /// weights bounded. Grey media (e.g. the macrofacet medium) return pdf_ratio = 1.
-    virtual bool sample_free_flight(const Ray& ray, float t_max, int channel, Sampler& sampler, MediumInteraction* mi,
-                                    Rgb* weight, Rgb* pdf_ratio) const = 0;
+    virtual bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel,
+                                    Sampler& sampler, MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const = 0;
     /// Transmittance (or an unbiased estimate of it) over [0, t_max].
     virtual Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const = 0;
     virtual const PhaseFunction& phase() const = 0;
     virtual std::string name() const = 0;
-    /// Non-null for <medium type="gpis"> (a realized surface, not a density): the integrator
-    /// traces realizations through it instead of sampling free flights (see medium_gpis.h).
-    virtual const GpisMedium* as_gpis() const { return nullptr; }
 };
 
 class HomogeneousMedium final : public Medium {
@@ -105,8 +116,8 @@ public:
     /// Exponential free flights with the hero channel's sigma_t (see Medium); exact
     /// (weight = albedo) for grey media. For a homogeneous medium this is what delta tracking
     /// with majorant = sigma_t reduces to.
-    bool sample_free_flight(const Ray& ray, float t_max, int channel, Sampler& sampler, MediumInteraction* mi,
-                            Rgb* weight, Rgb* pdf_ratio) const override;
+    bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
+                            MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const override;
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const override;
     const PhaseFunction& phase() const override { return *phase_; }
     std::string name() const override { return "homogeneous"; }

@@ -1,15 +1,29 @@
 // mfhost — the gpis medium through the C ABI (see medium_gpis.h and README.md).
 #include "medium_gpis.h"
 
+#include <macrofacet.h>
+
 #include <cmath>
-#include <exception>
 #include <limits>
 
+#include "library_abi.h"
 #include "mean_surface.h"
-#include "medium_macrofacet.h"
+#include "medium_params.h"
 
 namespace mf {
 namespace {
+
+// Layout of MediumInteraction::record for a crossing (double precision: the next segment starts
+// exactly there, and the reflection uses the library's normal unrounded).
+constexpr int kPoint = 0, kNormal = 3, kGradient = 6;
+
+mf_vec3 record_vec(const MediumInteraction& mi, int at) { return mf_vec3{mi.record[at], mi.record[at + 1], mi.record[at + 2]}; }
+
+void set_record_vec(MediumInteraction* mi, int at, const mf_vec3& v) {
+    mi->record[at] = v.x;
+    mi->record[at + 1] = v.y;
+    mi->record[at + 2] = v.z;
+}
 
 /// mf_sdf_fn over the library's mean surface: its signed distance and frame normal (world
 /// space). A failure is reported as NaN, which makes the trace fail with a status.
@@ -25,37 +39,61 @@ extern "C" void mean_sdf_callback(void* user_data, mf_vec3 p, mf_sdf_sample* out
     }
 }
 
-mf_vec3 unit_d(const Vec3& v) {
-    double x = v.x, y = v.y, z = v.z, l = std::sqrt(x * x + y * y + z * z);
-    if (!(l > 0)) return mf_vec3{0, 0, 1};
-    return mf_vec3{x / l, y / l, z / l};
+/// The first entering crossing of a realization along ray.o + t ray.d, 0 < t <= t_max: ON_SURFACE
+/// at `from`'s crossing (its exact point and sampled gradient) when given, else FREE at ray.o.
+bool trace(const mf_gpis* gpis, const MeanSurface& mean, const std::string& label, const Ray& ray, float t_max,
+           const MediumInteraction* from, uint64_t seed, mf_gpis_hit* hit) {
+    if (!(t_max > 0)) return false;
+    mf_gpis_start start;
+    mf_vec3 origin;
+    if (from) {
+        start.kind = MF_GPIS_START_ON_SURFACE;
+        start.gradient = record_vec(*from, kGradient);
+        origin = record_vec(*from, kPoint);
+    } else {
+        start.kind = MF_GPIS_START_FREE;
+        start.gradient = mf_vec3{0, 0, 0};
+        origin = to_mf(ray.o);
+    }
+    const double tm = std::isfinite(t_max) ? double(t_max) : std::numeric_limits<double>::infinity();
+    if (mf_gpis_trace(gpis, mean_sdf_callback, const_cast<mf_surface*>(mean.handle()), origin, to_mf_unit(ray.d), tm,
+                      &start, seed, hit) != MF_OK)
+        throw Error(label + ": mf_gpis_trace failed: " + mf_last_error());
+    return hit->hit;
 }
 
-/// Never used by the integrator (gpis vertices are delta reflections it handles itself): a delta
-/// lobe has no density, so eval/pdf are 0 and sample reflects with pdf 0.
-class GpisPhase final : public PhaseFunction {
+/// The crossing's specular reflection (mf_gpis_scatter about the recorded normal, Fresnel ×
+/// specular_reflectance): a Dirac lobe, so eval and pdf are 0 and sample returns *pdf = 0.
+class GpisReflection final : public PhaseFunction {
 public:
-    explicit GpisPhase(const GpisMedium* m) : m_(m) {}
+    GpisReflection(const mf_gpis* gpis, std::string label) : gpis_(gpis), label_(std::move(label)) {}
     Rgb eval(const MediumInteraction&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
     float pdf(const MediumInteraction&, const Vec3&, const Vec3&) const override { return 0.0f; }
     bool sample(const MediumInteraction& mi, const Vec3& wo, Sampler&, Vec3* wi, float* pdf, Rgb* weight) const override {
-        GpisHit h;
-        h.normal[0] = mi.frame_n.x;
-        h.normal[1] = mi.frame_n.y;
-        h.normal[2] = mi.frame_n.z;
+        mf_vec3 n = record_vec(mi, kNormal);
+        double l = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+        if (!(l > 0)) return false;
+        mf_phase_sample_result s;
+        if (mf_gpis_scatter(gpis_, to_mf_unit(wo), mf_vec3{n.x / l, n.y / l, n.z / l}, &s) != MF_OK)
+            throw Error(label_ + ": mf_gpis_scatter failed: " + mf_last_error());
+        if (!s.valid) return false;
+        *wi = from_mf(s.wo);
         *pdf = 0.0f;
-        return m_->scatter(wo, h, wi, weight);
+        *weight = Rgb(float(s.weight.r), float(s.weight.g), float(s.weight.b));
+        return weight->finite();
     }
+    bool is_delta() const override { return true; }
 
 private:
-    const GpisMedium* m_;
+    const mf_gpis* gpis_;
+    std::string label_;
 };
 
 }  // namespace
 
 GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label)
     : handle_(handle), mean_(std::move(mean)), label_(std::move(label)) {
-    phase_ = std::make_shared<GpisPhase>(this);
+    phase_ = std::make_shared<GpisReflection>(handle_, label_);
     if (mf_gpis_envelope(handle_, &envelope_) != MF_OK || !(envelope_ > 0)) {
         std::string msg = mf_last_error();
         mf_gpis_free(handle_);
@@ -65,72 +103,35 @@ GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean,
 
 GpisMedium::~GpisMedium() { mf_gpis_free(handle_); }
 
-bool GpisMedium::trace(const Vec3& o, const Vec3& d, double t_max, const GpisStart& start, uint64_t seed,
-                       GpisHit* hit) const {
-    if (!(t_max > 0)) return false;
-    mf_gpis_start st;
-    mf_vec3 origin;
-    if (start.on_surface) {
-        st.kind = MF_GPIS_START_ON_SURFACE;
-        st.gradient = mf_vec3{start.gradient[0], start.gradient[1], start.gradient[2]};
-        origin = mf_vec3{start.p[0], start.p[1], start.p[2]};
-    } else {
-        st.kind = MF_GPIS_START_FREE;
-        st.gradient = mf_vec3{0, 0, 0};
-        origin = mf_vec3{o.x, o.y, o.z};
-    }
-    mf_gpis_hit h;
-    const double tm = std::isfinite(t_max) ? t_max : std::numeric_limits<double>::infinity();
-    if (mf_gpis_trace(handle_, mean_sdf_callback, const_cast<mf_surface*>(mean_->handle()), origin, unit_d(d), tm, &st,
-                      seed, &h) != MF_OK)
-        throw Error(label_ + ": mf_gpis_trace failed: " + mf_last_error());
-    if (!h.hit) return false;
-    hit->t = h.t;
-    hit->p[0] = h.point.x, hit->p[1] = h.point.y, hit->p[2] = h.point.z;
-    hit->normal[0] = h.normal.x, hit->normal[1] = h.normal.y, hit->normal[2] = h.normal.z;
-    hit->gradient[0] = h.gradient.x, hit->gradient[1] = h.gradient.y, hit->gradient[2] = h.gradient.z;
-    return true;
-}
-
-bool GpisMedium::scatter(const Vec3& wo, const GpisHit& hit, Vec3* wi, Rgb* weight) const {
-    double nx = hit.normal[0], ny = hit.normal[1], nz = hit.normal[2], l = std::sqrt(nx * nx + ny * ny + nz * nz);
-    if (!(l > 0)) return false;
-    mf_phase_sample_result s;
-    if (mf_gpis_scatter(handle_, unit_d(wo), mf_vec3{nx / l, ny / l, nz / l}, &s) != MF_OK)
-        throw Error(label_ + ": mf_gpis_scatter failed: " + mf_last_error());
-    if (!s.valid) return false;
-    *wi = Vec3(float(s.wo.x), float(s.wo.y), float(s.wo.z));
-    *weight = Rgb(float(s.weight.r), float(s.weight.g), float(s.weight.b));
-    return weight->finite();
-}
-
-bool GpisMedium::sample_free_flight(const Ray& ray, float t_max, int, Sampler& sampler, MediumInteraction* mi,
-                                    Rgb* weight, Rgb* pdf_ratio) const {
-    *weight = Rgb(1.0f);
+bool GpisMedium::sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int, Sampler& sampler,
+                                    MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const {
+    *weight = Rgb(1.0f);  // the realization decides: a crossing or a pass, each with weight 1
     *pdf_ratio = Rgb(1.0f);
-    GpisHit h;
-    if (!trace(ray.o, ray.d, t_max, GpisStart(), sampler.next_u64(), &h)) return false;
+    const uint64_t seed = sampler.next_u64();
+    mf_gpis_hit h;
+    if (!trace(handle_, *mean_, label_, ray, t_max, from && from->medium == this ? from : nullptr, seed, &h)) return false;
     mi->t = float(h.t);
-    mi->p = h.point();
+    mi->p = from_mf(h.point);
     mi->wo = -ray.d;
-    mi->frame_n = h.n();
+    mi->frame_n = from_mf(h.normal);
     mi->medium = this;
+    set_record_vec(mi, kPoint, h.point);
+    set_record_vec(mi, kNormal, h.normal);
+    set_record_vec(mi, kGradient, h.gradient);
     return true;
 }
 
 Rgb GpisMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
-    GpisHit h;
-    return trace(ray.o, ray.d, t_max, GpisStart(), sampler.next_u64(), &h) ? Rgb(0.0f) : Rgb(1.0f);
+    const uint64_t seed = sampler.next_u64();
+    mf_gpis_hit h;
+    return trace(handle_, *mean_, label_, ray, t_max, nullptr, seed, &h) ? Rgb(0.0f) : Rgb(1.0f);
 }
 
 std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean) {
     if (bag.type != "gpis") throw Error(bag.loc, "not a gpis medium");
-    mf_params* params = bag_to_params(bag, nullptr);
+    ParamsHandle params = bag_to_params(bag);
     mf_gpis* handle = nullptr;
-    mf_status st = mf_gpis_new(params, &handle);
-    std::string msg = st == MF_OK ? std::string() : mf_last_error();
-    mf_params_free(params);
-    if (st != MF_OK) throw medium_param_error(bag, msg);
+    if (mf_gpis_new(params.get(), &handle) != MF_OK) throw medium_param_error(bag, mf_last_error());
     return std::make_shared<GpisMedium>(handle, std::move(mean), medium_label(bag));
 }
 

@@ -1,47 +1,36 @@
 // mfhost — <medium type="gpis">: the realization-based ground truth (seeds/004) through the C
-// ABI's mf_gpis_* functions.
+// ABI's mf_gpis_* functions, behind the same Medium interface as every other medium.
 //
 // A shape whose interior is a gpis medium is the *mean surface* of a Gaussian-process implicit
 // surface; realizations live in the band |f| <= envelope (mf_gpis_envelope) around it. The
 // region f < +envelope is registered exactly like a macrofacet region (make_region_boundary:
 // the same null-BSDF boundary), with this medium as its interior. The mean is the library's
-// signed distance of the shape (mean_surface.h), handed to mf_gpis_trace as its callback. The integrator
-// special-cases it (Medium::as_gpis): inside the region a path segment is realized by
-// mf_gpis_trace up to the next surface (the band's exit); a hit is a delta reflection
-// (mf_gpis_scatter), after which the next segment starts ON_SURFACE with the hit's sampled
-// gradient (Renewal+ memory; Renewal ignores it). Shadow rays crossing the region trace a fresh
-// realization (START_FREE): a hit occludes (transmittance 0), a miss transmits (1).
+// signed distance of the shape (mean_surface.h), handed to mf_gpis_trace as its callback.
+//
+//  * Free flight: the segment [0, t_max] up to the next surface is realized by mf_gpis_trace;
+//    its first entering crossing is the interaction (weight 1: the realization decides, nothing
+//    is sampled against a density), a miss passes t_max. A flight that leaves a crossing of this
+//    medium (`from`) starts ON_SURFACE there with that crossing's sampled gradient (Renewal+
+//    memory; Renewal ignores the gradient); any other flight starts FREE.
+//  * Phase function: the crossing reflects specularly (mf_gpis_scatter about its normal): a
+//    Dirac lobe, so the integrator does no NEE there and emitters hit next count fully.
+//  * Transmittance (shadow rays crossing the region): a fresh realization (START_FREE) over the
+//    segment: a crossing occludes (0), a miss transmits (1), an unbiased estimate of the Renewal
+//    transmittance (a shadow ray starts its own realization, as a ray entering the band does).
+// Every call takes its seed from one dimension of the path's sampler, so renders stay
+// bit-identical per --seed whatever the thread count.
 #pragma once
-
-#include <macrofacet.h>
 
 #include <memory>
 #include <string>
 
 #include "medium.h"
-#include "shape.h"
+
+struct mf_gpis;
 
 namespace mf {
 
 class MeanSurface;
-
-/// One crossing of a realization (double precision: the next segment starts exactly there).
-struct GpisHit {
-    double t = 0;
-    double p[3] = {0, 0, 0};
-    double normal[3] = {0, 0, 1};
-    double gradient[3] = {0, 0, 1};
-    Vec3 point() const { return Vec3(float(p[0]), float(p[1]), float(p[2])); }
-    Vec3 n() const { return Vec3(float(normal[0]), float(normal[1]), float(normal[2])); }
-};
-
-/// The start of a traced segment: free (camera/light ray entering the band, or after any other
-/// event) or on the previous crossing with its sampled gradient.
-struct GpisStart {
-    bool on_surface = false;
-    double p[3] = {0, 0, 0};
-    double gradient[3] = {0, 0, 1};
-};
 
 class GpisMedium final : public Medium {
 public:
@@ -51,26 +40,18 @@ public:
     GpisMedium(const GpisMedium&) = delete;
     GpisMedium& operator=(const GpisMedium&) = delete;
 
-    /// Realizes the process along o + t d, 0 < t <= t_max (o = start.p when start.on_surface);
-    /// true and *hit on the first entering crossing.
-    bool trace(const Vec3& o, const Vec3& d, double t_max, const GpisStart& start, uint64_t seed, GpisHit* hit) const;
-    /// Delta reflection of wo (pointing away from the hit, = -ray.d) about the hit normal:
-    /// *wi and the RGB weight (Fresnel × specular_reflectance). False if invalid.
-    bool scatter(const Vec3& wo, const GpisHit& hit, Vec3* wi, Rgb* weight) const;
-
-    /// Generic-interface fallbacks (the integrator uses trace/scatter directly): a free flight is
-    /// a START_FREE trace whose hit is reported as the interaction (frame_n = sampled normal).
-    bool sample_free_flight(const Ray& ray, float t_max, int channel, Sampler& sampler, MediumInteraction* mi,
-                            Rgb* weight, Rgb* pdf_ratio) const override;
-    /// Binary estimate: a fresh realization (START_FREE, seed from `sampler`) hit = 0, miss = 1.
+    /// The first crossing of a realization of [0, t_max] (see the file comment); *mi carries the
+    /// crossing's normal as frame_n and, in `record`, its exact point, normal and gradient.
+    bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
+                            MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const override;
+    /// Binary estimate: a fresh realization (START_FREE, seed from `sampler`) crossing = 0, miss = 1.
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const override;
+    /// The specular reflection at a crossing (is_delta).
     const PhaseFunction& phase() const override { return *phase_; }
     std::string name() const override { return "gpis"; }
-    const GpisMedium* as_gpis() const override { return this; }
 
+    /// Half-width of the band of realizations around the mean surface (scene units).
     double envelope() const { return envelope_; }
-    const MeanSurface& mean_surface() const { return *mean_; }
-    const mf_gpis* handle() const { return handle_; }
 
 private:
     mf_gpis* handle_;
@@ -80,8 +61,9 @@ private:
     std::string label_;
 };
 
-/// The gpis hook: parameter bag -> mf_params -> mf_gpis_new (same bag conversion and error
-/// locations as the macrofacet hook). Throws mf::Error at the offending parameter's line.
+/// The gpis hook: parameter bag -> mf_params -> mf_gpis_new (the same bag conversion and error
+/// locations as the macrofacet hook, medium_params.h). Throws mf::Error at the offending
+/// parameter's line.
 std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean);
 
 }  // namespace mf

@@ -16,7 +16,6 @@
 #include "medium.h"
 
 struct mf_medium;
-struct mf_params;
 struct mf_track_stats;
 
 namespace mf {
@@ -36,8 +35,8 @@ public:
     MacrofacetMedium(const MacrofacetMedium&) = delete;
     MacrofacetMedium& operator=(const MacrofacetMedium&) = delete;
 
-    bool sample_free_flight(const Ray& ray, float t_max, int channel, Sampler& sampler, MediumInteraction* mi,
-                            Rgb* weight, Rgb* pdf_ratio) const override;
+    bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
+                            MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const override;
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const override;
     const PhaseFunction& phase() const override { return *phase_; }
     std::string name() const override { return "macrofacet"; }
@@ -63,18 +62,6 @@ private:
     std::string label_;
     mutable std::atomic<uint64_t> calls_{0}, queries_{0}, segments_{0}, tentative_{0}, violations_{0};
 };
-
-/// Shared by the macrofacet and gpis hooks: the parameter bag as an mf_params handle (the caller
-/// frees it with mf_params_free; *sigma = sigma or sqrt(variance) when given, else -1). Throws
-/// mf::Error at the offending parameter's line when the library rejects a value.
-struct mf_params* bag_to_params(const MediumParamBag& bag, double* sigma);
-/// An error for a library message about `bag`, at the line of the parameter the message names
-/// (the longest bag name quoted in it), else at the <medium> element.
-Error medium_param_error(const MediumParamBag& bag, const std::string& msg);
-/// "file:line: <medium type=... id=...>" for messages at run time.
-std::string medium_label(const MediumParamBag& bag);
-/// mf_last_error_message() of this thread as a string.
-std::string mf_last_error();
 
 /// Builds the macrofacet medium of a mean surface from its parameter bag (mf_params_* /
 /// mf_medium_new); throws mf::Error at the file:line of the offending parameter.

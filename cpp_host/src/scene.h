@@ -25,11 +25,18 @@ struct Camera {
     Ray generate_ray(float fx, float fy) const;
 };
 
+/// How light from non-delta emitters is gathered at non-delta vertices: emitter sampling (NEE)
+/// and BSDF / phase sampling combined by the power heuristic (the default, as Mitsuba's volpath),
+/// or one of them alone (delta emitters are always sampled). Each is an unbiased estimator of the
+/// same image, so the three agree in expectation (test_render/light_sampling_estimators_agree).
+enum class LightSampling { Mis, BsdfOnly, EmitterOnly };
+
 struct IntegratorSettings {
     bool volumetric = true;  // volpath (media) or path (media ignored)
     int max_depth = -1;      // -1 = unbounded
     int rr_depth = 5;
     bool hide_emitters = false;
+    LightSampling light_sampling = LightSampling::Mis;  // not in the XML (Mitsuba 3.9.1 has no such parameter)
 };
 
 struct SceneSummary {

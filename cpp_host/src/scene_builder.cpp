@@ -10,6 +10,7 @@
 #include <set>
 
 #include "image_io.h"
+#include "library_abi.h"
 #include "mean_surface.h"
 #include "medium_gpis.h"
 #include "medium_macrofacet.h"
@@ -470,7 +471,10 @@ private:
 
         auto bsdfs = o.children_with_tag("bsdf");
         if (bsdfs.size() > 1) throw err(o, "has more than one BSDF");
-        shape->bsdf = bsdfs.empty() ? make_diffuse(Rgb(0.5f)) : build_bsdf(*bsdfs[0]->obj);
+        auto ems = o.children_with_tag("emitter");
+        // No <bsdf>: Mitsuba 3's default (Shape's constructor) is diffuse 0.5, but black for an
+        // area emitter, which then reflects nothing.
+        shape->bsdf = bsdfs.empty() ? make_diffuse(Rgb(ems.empty() ? 0.5f : 0.0f)) : build_bsdf(*bsdfs[0]->obj);
 
         std::shared_ptr<const MediumParamBag> mf_bag[2];
         for (const Child* c : o.children_with_tag("medium")) {
@@ -487,7 +491,6 @@ private:
                 (interior ? shape->interior : shape->exterior) = build_medium(*c->obj);
             }
         }
-        auto ems = o.children_with_tag("emitter");
         if (ems.size() > 1) throw err(o, "has more than one emitter");
         std::shared_ptr<Emitter> em;
         if (!ems.empty()) {

@@ -72,7 +72,7 @@ TEST_CASE(shadow_rays) {
     auto scene = build_scene(parse_scene_string(xml, "shadow.xml", {}), BuildOptions(), nullptr);
     const GpisMedium* g = nullptr;
     for (const auto& m : scene->media)
-        if (m->as_gpis()) g = m->as_gpis();
+        if (auto* gm = dynamic_cast<const GpisMedium*>(m.get())) g = gm;
     CHECK(g != nullptr);
     if (!g) return;
     CHECK_NEAR(g->envelope(), 6 * 0.02, 1e-9);  // default shell_extent 6

@@ -70,7 +70,7 @@ static TrackStats track(const MacrofacetMedium& m, const Ray& r, float t, int n,
         MediumInteraction mi;
         Rgb w, pr;
         Sampler s2(seed + 1, uint64_t(i), 0);
-        if (m.sample_free_flight(r, t, 0, s2, &mi, &w, &pr)) ++coll;
+        if (m.sample_free_flight(r, t, nullptr, 0, s2, &mi, &w, &pr)) ++coll;
     }
     TrackStats st;
     st.T_ratio = sum / n;

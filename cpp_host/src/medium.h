@@ -23,6 +23,7 @@ namespace mf {
 class Medium;
 class Shape;
 class GpisMedium;
+struct MediumFields;
 
 struct MediumInteraction {
     Vec3 p;                  // scattering position
@@ -135,6 +136,8 @@ struct MediumParamBag {
     std::string id;
     SourceLoc loc;     // of the <medium> element
     std::vector<std::pair<std::string, ParamValue>> params;  // in document order
+    /// The parameters given as non-constant volumes or textures (field.h); null if none.
+    std::shared_ptr<const MediumFields> fields;
     const ParamValue* get(const std::string& name) const {
         for (const auto& kv : params)
             if (kv.first == name) return &kv.second;

@@ -8,7 +8,9 @@
 #include "image_io.h"
 #include "mean_surface.h"
 #include "medium_gpis.h"
+#include "medium_fields.h"
 #include "medium_macrofacet.h"
+#include "sdf_grid.h"
 
 namespace mf {
 
@@ -80,6 +82,9 @@ private:
                 if (o.type != "area") scene_->add_emitter(build_emitter(o, nullptr));
             } else if (o.tag == "texture") {
                 build_texture(o);
+            } else if (o.tag == "volume") {
+                skip_if_broken(o);  // defined for <ref>; its user checks it against its parameter
+                check_volume_element(o, volume_files_);
             } else if (o.tag == "bsdf") {
                 build_bsdf(o);
             } else if (o.tag == "medium") {
@@ -107,6 +112,7 @@ private:
     std::map<const SceneObject*, std::shared_ptr<const Texture>> textures_;
     std::map<const SceneObject*, std::shared_ptr<const Medium>> media_;
     std::map<const SceneObject*, std::shared_ptr<const MediumParamBag>> bags_;
+    VolumeFileCache volume_files_;
 
     static Error err(const SceneObject& o, const std::string& msg) { return Error(o.loc, o.describe() + ": " + msg); }
     static Error perr(const SceneObject& o, const std::string& prop, const std::string& msg) {
@@ -344,7 +350,9 @@ private:
             }
             bag->params.emplace_back(p.name, v);
         }
-        o.check_all_used();  // nested objects are not allowed in the bag
+        // Spatially varying parameters (nested or referenced volumes and textures; issue 12).
+        bag->fields = build_medium_fields(o, bag.get(), volume_files_, [this](const SceneObject& t) { return build_texture(t); });
+        o.check_all_used();  // other nested objects are not allowed in the bag
         bags_[&o] = bag;
         return bag;
     }
@@ -433,8 +441,12 @@ private:
                 });
             }
             shape = ms;
+        } else if (t == "sdfgrid") {
+            if (flip) throw perr(o, "flip_normals", "is not supported by an sdfgrid mean surface (negate its values instead)");
+            shape = std::make_shared<SdfGridShape>(load_sdf_grid(o, to_world));
         } else {
-            throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk)");
+            throw err(o, "unsupported shape plugin \"" + t +
+                             "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk, sdfgrid)");
         }
         shape->id = o.id;
         shape->loc = o.loc;
@@ -468,6 +480,10 @@ private:
             shape->emitter = em.get();
         }
         o.check_all_used();
+        if (t == "sdfgrid" && !mf_bag[0])
+            throw err(o, "sdfgrid is supported as the mean surface of a macrofacet medium (a <medium type=\"macrofacet\"> or "
+                         "\"gpis\" named \"interior\")");
+        if (mf_bag[0]) check_mean_surface_fields(*mf_bag[0], *shape);
 
         for (int k = 0; k < 2; ++k) {
             if (!mf_bag[k]) continue;
@@ -487,6 +503,31 @@ private:
                                                           "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
             if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium cannot be an emitter");
             shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
+            if (t == "sdfgrid" || mf_bag[0]->fields) {
+                // Validated here; rendered once the library takes local parameters and SDF grids.
+                if (!opts_.validate_only) {
+                    refuse_varying_fields(*mf_bag[0]);
+                    throw err(o, "an sdfgrid mean surface is validated but not rendered yet: it lands with the library's "
+                                 "SDF-grid surface (issue 12); mfrender --check validates such scenes");
+                }
+                MediumParamBag stand_in = stand_in_bag(*mf_bag[0]);
+                if (t == "sdfgrid") {
+                    if (kind == "gpis") create_gpis_medium(stand_in, nullptr);
+                    else create_macrofacet_medium(stand_in, nullptr);
+                    return;
+                }
+                auto surface = MeanSurface::of(*shape);
+                if (kind == "gpis") {
+                    auto g = create_gpis_medium(stand_in, surface);
+                    scene_->media.push_back(g);
+                    scene_->add_shape(make_region_boundary(shape, *surface, g->envelope(), g));
+                } else {
+                    auto m = create_macrofacet_medium(stand_in, surface);
+                    scene_->media.push_back(m);
+                    scene_->add_shape(make_region_boundary(shape, *surface, m->shell_top(), m));
+                }
+                return;
+            }
             auto surface = MeanSurface::of(*shape);
             if (kind == "gpis") {
                 auto g = create_gpis_medium(*mf_bag[0], surface);
@@ -499,8 +540,27 @@ private:
             }
             return;
         }
+        if (t == "sdfgrid") return;  // (placeholders: the medium is not built, nothing to trace)
         scene_->add_shape(shape);
         if (em) scene_->add_emitter(em);
+    }
+
+    /// The checks of a medium's spatially varying parameters that need its mean surface, and an
+    /// sdfgrid's own: the grid must contain the whole medium region f < shell top.
+    void check_mean_surface_fields(const MediumParamBag& bag, const Shape& shape) {
+        check_fields_on_surface(bag, shape);
+        auto* sdf = dynamic_cast<const SdfGridShape*>(&shape);
+        if (!sdf) return;
+        const SdfGrid& g = sdf->grid();
+        const double top = shell_top_bound(bag);
+        long long node = g.boundary_node_below(top);
+        if (node < 0) return;
+        long long i = node % g.nx, j = (node / g.nx) % g.ny, k = node / (g.nx * (long long)g.ny);
+        throw Error(shape.loc, "<shape type=\"sdfgrid\">: the medium's region f < " + std::to_string(top) +
+                                   " (the shell's top, shell_extent x the largest sigma) reaches the grid's boundary at node (" +
+                                   std::to_string(i) + ", " + std::to_string(j) + ", " + std::to_string(k) + ") (f = " +
+                                   std::to_string(g.at(int(i), int(j), int(k))) +
+                                   "): the SDF grid must contain the whole medium; enlarge it");
     }
 
     // ------------------------------------------------------------------ emitters

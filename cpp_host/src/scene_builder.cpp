@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include <map>
+#include <set>
 
 #include "image_io.h"
 #include "mean_surface.h"
@@ -113,6 +114,7 @@ private:
     std::map<const SceneObject*, std::shared_ptr<const Medium>> media_;
     std::map<const SceneObject*, std::shared_ptr<const MediumParamBag>> bags_;
     VolumeFileCache volume_files_;
+    std::set<const SceneObject*> failed_bags_;
 
     static Error err(const SceneObject& o, const std::string& msg) { return Error(o.loc, o.describe() + ": " + msg); }
     static Error perr(const SceneObject& o, const std::string& prop, const std::string& msg) {
@@ -350,8 +352,15 @@ private:
             }
             bag->params.emplace_back(p.name, v);
         }
-        // Spatially varying parameters (nested or referenced volumes and textures; issue 12).
-        bag->fields = build_medium_fields(o, bag.get(), volume_files_, [this](const SceneObject& t) { return build_texture(t); });
+        // Spatially varying parameters (nested or referenced volumes and textures; issue 12). A
+        // medium whose fields failed is reported once, not again at each shape referencing it.
+        if (failed_bags_.count(&o)) throw AlreadyReported{};
+        try {
+            bag->fields = build_medium_fields(o, bag.get(), volume_files_, [this](const SceneObject& t) { return build_texture(t); });
+        } catch (const Error&) {
+            failed_bags_.insert(&o);
+            throw;
+        }
         o.check_all_used();  // other nested objects are not allowed in the bag
         bags_[&o] = bag;
         return bag;
@@ -763,7 +772,9 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               matrix (16 or 9 values, row-major), lookat (origin, target, up; without up: the
               first axis of Mitsuba's coordinate_system(direction)); applied in order
   shapes      obj (flip_tex_coords), ply (ascii / binary_little_endian), serialized (shape_index;
-              zlib), sphere (center, radius), rectangle, cube, disk; to_world, flip_normals,
+              zlib), sphere (center, radius), rectangle, cube, disk, sdfgrid (filename .vol |
+              .vdb with grid, normals; only as the mean surface of a macrofacet/gpis medium,
+              validated, not rendered yet); to_world, flip_normals,
               face_normals; nested or referenced bsdf, area emitter (nested, or a top-level
               <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
               uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)
@@ -781,7 +792,11 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               macrofacet (as the interior of its mean-surface shape; parameters as in the
               C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
               lengthscale*, micro_bsdf, material | eta,k, specular_reflectance,
-              reflectance, vndf_sampling, mixture_ratio)
+              reflectance, vndf_sampling, mixture_ratio); sigma, variance, alpha*,
+              lengthscale*, specular_reflectance, reflectance and the anisotropy may be a
+              nested <volume> (constvolume: value; gridvolume: filename .vol | .vdb with grid,
+              to_world, filter_type trilinear|nearest, wrap_mode clamp|repeat|mirror,
+              use_grid_bbox) or <texture>: validated; only constvolumes render yet
               gpis (realization-based ground truth; as the interior of its mean-surface
               shape; the macrofacet names that apply: sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,
@@ -798,7 +813,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. plastic,
 roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
-normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media, gridvolume,
+normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media,
 spectra from files or wavelength lists.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only

@@ -8,7 +8,7 @@
 #   MF_SETUP_SLURM=1    slurm-wlm + munge (scripts/slurm_local_test.sh)
 set -euo pipefail
 
-APT_PACKAGES=(cmake g++ make pkg-config libembree-dev libopenexr-dev libpng-dev libpugixml-dev libjpeg-dev zlib1g-dev)
+APT_PACKAGES=(cmake g++ make pkg-config libembree-dev libopenexr-dev libpng-dev libpugixml-dev libjpeg-dev zlib1g-dev libopenvdb-dev libboost-dev)
 if [ "${MF_SETUP_FUZZ:-0}" = 1 ]; then APT_PACKAGES+=(clang-14 libclang-rt-14-dev); fi
 if [ "${MF_SETUP_SLURM:-0}" = 1 ]; then APT_PACKAGES+=(slurm-wlm munge); fi
 CBINDGEN_VERSION=0.29.4

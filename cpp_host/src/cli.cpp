@@ -1,6 +1,8 @@
 // mfhost — mfrender command line.
 #include "cli.h"
 
+#include <algorithm>
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -14,9 +16,11 @@
 #include <string>
 
 #include "image_io.h"
+#include "field.h"
 #include "medium_macrofacet.h"
 #include "render.h"
 #include "scene_builder.h"
+#include "sdf_grid.h"
 #include "shard.h"
 #include "xml_scene.h"
 
@@ -251,6 +255,7 @@ int mfrender_main(int argc, char** argv) {
         ErrorSink problems;
         ParsedScene parsed = parse_scene_file(scene_path, defines, &problems);
         bopts.allow_macrofacet_placeholders = false;  // --check validates macrofacet parameters too
+        bopts.validate_only = check;  // spatially varying parameters: validated, not rendered yet
         BuildReport report;
         std::unique_ptr<Scene> scene;
         if (parsed.root) scene = build_scene(parsed, bopts, &report, &problems);
@@ -267,6 +272,18 @@ int mfrender_main(int argc, char** argv) {
                             u.bag->params.size());
                 for (const auto& kv : u.bag->params) std::printf(" %s", kv.first.c_str());
                 std::printf("\n");
+                if (u.bag->fields)
+                    for (const auto& f : u.bag->fields->fields) {
+                        ValueRange r = f->range();
+                        std::printf("    parameter %s varies: %s (%s), %d channel%s, values in [%g, %g]%s\n", f->param().c_str(),
+                                    f->element().c_str(), f->loc().str().c_str(), f->channels(), f->channels() == 1 ? "" : "s",
+                                    *std::min_element(r.lo, r.lo + f->channels()), *std::max_element(r.hi, r.hi + f->channels()),
+                                    f->param() == "anisotropy" ? " (entries)" : "");
+                    }
+                if (auto* sdf = dynamic_cast<const SdfGridShape*>(u.shape.get()))
+                    std::printf("    sdfgrid mean surface: %dx%dx%d samples, distances in [%g, %g], gradient bound %.4g\n",
+                                sdf->grid().nx, sdf->grid().ny, sdf->grid().nz, sdf->grid().value_min, sdf->grid().value_max,
+                                sdf->grid().lipschitz);
             }
             return;
         }

@@ -2,6 +2,7 @@
 // scene file and line it originates from; main() prints it as one line and exits non-zero.
 #pragma once
 
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -70,6 +71,13 @@ private:
     std::vector<Error> errors_;
     size_t dropped_ = 0;
 };
+
+/// A number for a message: 6 significant digits ("0.3", "1e-05", "nan").
+inline std::string number_str(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "%.6g", v);
+    return buf;
+}
 
 /// A user-supplied string for a message: quoted, and cut to `max_chars` (with its full length)
 /// so that a huge attribute is never echoed whole.

@@ -27,6 +27,7 @@ namespace mf {
 
 class Medium;
 class Shape;
+struct MediumFields;
 
 struct MediumInteraction {
     Vec3 p;                  // scattering position
@@ -146,6 +147,8 @@ struct MediumParamBag {
     std::string id;
     SourceLoc loc;     // of the <medium> element
     std::vector<std::pair<std::string, ParamValue>> params;  // in document order
+    /// The parameters given as non-constant volumes or textures (field.h); null if none.
+    std::shared_ptr<const MediumFields> fields;
     const ParamValue* get(const std::string& name) const {
         for (const auto& kv : params)
             if (kv.first == name) return &kv.second;

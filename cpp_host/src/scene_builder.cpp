@@ -13,7 +13,9 @@
 #include "library_abi.h"
 #include "mean_surface.h"
 #include "medium_gpis.h"
+#include "medium_fields.h"
 #include "medium_macrofacet.h"
+#include "sdf_grid.h"
 
 namespace mf {
 
@@ -85,6 +87,9 @@ private:
                 if (o.type != "area") scene_->add_emitter(build_emitter(o, nullptr));
             } else if (o.tag == "texture") {
                 build_texture(o);
+            } else if (o.tag == "volume") {
+                skip_if_broken(o);  // defined for <ref>; its user checks it against its parameter
+                check_volume_element(o, volume_files_);
             } else if (o.tag == "bsdf") {
                 build_bsdf(o);
             } else if (o.tag == "medium") {
@@ -116,6 +121,7 @@ private:
     /// Macrofacet media with a nested mean surface (add_boundary): the <shape> and the medium.
     std::map<const MediumParamBag*, std::shared_ptr<SceneObject>> mean_surfaces_;
     std::map<const MediumParamBag*, std::shared_ptr<const MacrofacetMedium>> boundary_media_;
+    VolumeFileCache volume_files_;
 
     static Error err(const SceneObject& o, const std::string& msg) { return Error(o.loc, o.describe() + ": " + msg); }
     static Error perr(const SceneObject& o, const std::string& prop, const std::string& msg) {
@@ -367,6 +373,8 @@ private:
             if (o.type != "macrofacet") throw Error(ms->loc, o.describe() + ": only a macrofacet medium takes a nested mean surface");
             mean_surfaces_[bag.get()] = ms->obj;
         }
+        // Spatially varying parameters (nested or referenced volumes and textures; issue 12).
+        bag->fields = build_medium_fields(o, bag.get(), volume_files_, [this](const SceneObject& t) { return build_texture(t); });
         o.check_all_used();  // other nested objects are not allowed in the bag
         bags_[&o] = bag;
         return bag;
@@ -456,8 +464,12 @@ private:
                 });
             }
             shape = ms;
+        } else if (t == "sdfgrid") {
+            if (flip) throw perr(o, "flip_normals", "is not supported by an sdfgrid mean surface (negate its values instead)");
+            shape = std::make_shared<SdfGridShape>(load_sdf_grid(o, to_world));
         } else {
-            throw err(o, "unsupported shape plugin \"" + t + "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk)");
+            throw err(o, "unsupported shape plugin \"" + t +
+                             "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk, sdfgrid)");
         }
         shape->id = o.id;
         shape->loc = o.loc;
@@ -500,6 +512,10 @@ private:
             shape->emitter = em.get();
         }
         o.check_all_used();
+        if (t == "sdfgrid" && !mf_bag[0])
+            throw err(o, "sdfgrid is supported as the mean surface of a macrofacet medium (a <medium type=\"macrofacet\"> or "
+                         "\"gpis\" named \"interior\")");
+        if (mf_bag[0]) check_mean_surface_fields(*mf_bag[0], *shape);
 
         for (int k = 0; k < 2; ++k) {
             if (!mf_bag[k]) continue;
@@ -528,6 +544,31 @@ private:
                                                           "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
             if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium cannot be an emitter");
             shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
+            if (t == "sdfgrid" || mf_bag[0]->fields) {
+                // Validated here; rendered once the library takes local parameters and SDF grids.
+                if (!opts_.validate_only) {
+                    refuse_varying_fields(*mf_bag[0]);
+                    throw err(o, "an sdfgrid mean surface is validated but not rendered yet: it lands with the library's "
+                                 "SDF-grid surface (issue 12); mfrender --check validates such scenes");
+                }
+                MediumParamBag stand_in = stand_in_bag(*mf_bag[0]);
+                if (t == "sdfgrid") {
+                    if (kind == "gpis") create_gpis_medium(stand_in, nullptr);
+                    else create_macrofacet_medium(stand_in, nullptr);
+                    return;
+                }
+                auto surface = MeanSurface::of(*shape);
+                if (kind == "gpis") {
+                    auto g = create_gpis_medium(stand_in, surface);
+                    scene_->media.push_back(g);
+                    scene_->add_shape(make_region_boundary(shape, *surface, g->envelope(), g));
+                } else {
+                    auto m = create_macrofacet_medium(stand_in, surface);
+                    scene_->media.push_back(m);
+                    scene_->add_shape(make_region_boundary(shape, *surface, m->shell_top(), m));
+                }
+                return;
+            }
             auto surface = MeanSurface::of(*shape);
             if (kind == "gpis") {
                 auto g = create_gpis_medium(*mf_bag[0], surface);
@@ -540,6 +581,7 @@ private:
             }
             return;
         }
+        if (t == "sdfgrid") return;  // (placeholders: the medium is not built, nothing to trace)
         scene_->add_shape(shape);
         if (em) scene_->add_emitter(em);
     }
@@ -601,6 +643,22 @@ private:
                                  ") f = " + std::to_string(f) + " (for a sphere of radius r: a boundary of radius >= r + k "
                                  "sigma; for a mesh: python3 -m macrofacet_mitsuba enclosure)");
         }
+    /// The checks of a medium's spatially varying parameters that need its mean surface, and an
+    /// sdfgrid's own: the grid must contain the whole medium region f < shell top.
+    void check_mean_surface_fields(const MediumParamBag& bag, const Shape& shape) {
+        check_fields_on_surface(bag, shape);
+        auto* sdf = dynamic_cast<const SdfGridShape*>(&shape);
+        if (!sdf) return;
+        const SdfGrid& g = sdf->grid();
+        const double top = shell_top_bound(bag);
+        long long node = g.boundary_node_below(top);
+        if (node < 0) return;
+        long long i = node % g.nx, j = (node / g.nx) % g.ny, k = node / (g.nx * (long long)g.ny);
+        throw Error(shape.loc, "<shape type=\"sdfgrid\">: the medium's region f < " + std::to_string(top) +
+                                   " (the shell's top, shell_extent x the largest sigma) reaches the grid's boundary at node (" +
+                                   std::to_string(i) + ", " + std::to_string(j) + ", " + std::to_string(k) + ") (f = " +
+                                   std::to_string(g.at(int(i), int(j), int(k))) +
+                                   "): the SDF grid must contain the whole medium; enlarge it");
     }
 
     // ------------------------------------------------------------------ emitters
@@ -803,7 +861,9 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               matrix (16 or 9 values, row-major), lookat (origin, target, up; without up: the
               first axis of Mitsuba's coordinate_system(direction)); applied in order
   shapes      obj (flip_tex_coords), ply (ascii / binary_little_endian), serialized (shape_index;
-              zlib), sphere (center, radius), rectangle, cube, disk; to_world, flip_normals,
+              zlib), sphere (center, radius), rectangle, cube, disk, sdfgrid (filename .vol |
+              .vdb with grid, normals; only as the mean surface of a macrofacet/gpis medium,
+              validated, not rendered yet); to_world, flip_normals,
               face_normals; nested or referenced bsdf, area emitter (nested, or a top-level
               <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
               uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)
@@ -821,10 +881,14 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               macrofacet (as the interior of its mean-surface shape; parameters as in the
               C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
               lengthscale*, micro_bsdf, material | eta,k, specular_reflectance,
-              reflectance, vndf_sampling, mixture_ratio); or in the form that Mitsuba 3
-              with the macrofacet plugin also reads: the medium nests its mean surface
-              as <shape name="mean_surface"> (sphere or mesh) and the shapes whose
-              interior it is are boundaries (<bsdf type="null"/>, containing f < k sigma)
+              reflectance, vndf_sampling, mixture_ratio); sigma, variance, alpha*,
+              lengthscale*, specular_reflectance, reflectance and the anisotropy may be a
+              nested <volume> (constvolume: value; gridvolume: filename .vol | .vdb with grid,
+              to_world, filter_type trilinear|nearest, wrap_mode clamp|repeat|mirror,
+              use_grid_bbox) or <texture>; or in the form that Mitsuba 3 with the
+              macrofacet plugin also reads: the medium nests its mean surface as
+              <shape name="mean_surface"> (sphere or mesh) and the shapes whose interior
+              it is are boundaries (<bsdf type="null"/>, containing f < k sigma)
               gpis (realization-based ground truth; as the interior of its mean-surface
               shape; the macrofacet names that apply: sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,
@@ -841,7 +905,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. plastic,
 roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
-normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media, gridvolume,
+normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media,
 spectra from files or wavelength lists.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only

@@ -16,6 +16,11 @@ struct BuildOptions {
     /// Build everything but do not call the macrofacet hook (for --check and tests): shapes keep
     /// their parameter bags and no medium object; the scene must not be rendered then.
     bool allow_macrofacet_placeholders = false;
+    /// Build and validate everything as for rendering, but accept what only the renderer cannot
+    /// do yet — spatially varying medium parameters and sdfgrid mean surfaces (issue 12) — with
+    /// stand-in values for the library's checks (mfrender --check): the scene must not be
+    /// rendered then.
+    bool validate_only = false;
     int spp_override = -1;
     long long seed_override = -1;
     int max_depth_override = -2;  // -2 = keep the scene's value

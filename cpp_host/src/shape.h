@@ -54,6 +54,8 @@ public:
         return Frame(n).s;
     }
     static constexpr uint32_t kNoPrim = ~0u;
+    /// Whether the shape has Mitsuba uv (texture coordinates) at its points.
+    virtual bool has_uv() const { return false; }
     virtual Aabb bounds() const = 0;
     virtual float surface_area() const = 0;
     /// Uniform sampling by area: position and unit normal (pdf = 1 / surface_area()).
@@ -98,6 +100,7 @@ public:
     using Parameterization = std::function<void(const Vec3& p, Vec2* uv, Vec3* dpdu)>;
     void set_parameterization(Parameterization f) { param_ = std::move(f); }
     Vec3 dpdu(const Vec3& p, const Vec3& n, uint32_t prim) const override;
+    bool has_uv() const override { return !mesh_.uv.empty() || bool(param_); }
 
 private:
     TriMesh mesh_;
@@ -116,6 +119,7 @@ public:
     SphereShape(const Vec3& center, float radius, bool flip, const Mat4& rotation = Mat4())
         : c_(center), r_(radius), flip_(flip), rot_(rotation) {}
     Vec3 dpdu(const Vec3& p, const Vec3& n, uint32_t prim) const override;
+    bool has_uv() const override { return true; }
     Aabb bounds() const override;
     float surface_area() const override { return 4.0f * kPi * r_ * r_; }
     void sample_position(const Vec2& u, Vec3* p, Vec3* n) const override;

@@ -1,6 +1,9 @@
 // mfhost — textures (see texture.h).
 #include "texture.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace mf {
 
 namespace {
@@ -9,7 +12,10 @@ class ConstantTexture final : public Texture {
 public:
     explicit ConstantTexture(const Rgb& v) : v_(v) {}
     Rgb eval(const Vec2&) const override { return v_; }
-    float max_value() const override { return v_.max(); }
+    ValueRange range() const override {
+        float v[3] = {v_.r, v_.g, v_.b};
+        return ValueRange::of(v, 3);
+    }
     const Rgb* constant() const override { return &v_; }
 
 private:
@@ -25,7 +31,17 @@ public:
         float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
         return ((u > 0.5f) == (v > 0.5f)) ? c0_->eval(uv_in) : c1_->eval(uv_in);
     }
-    float max_value() const override { return std::max(c0_->max_value(), c1_->max_value()); }
+    // Both colours may occur in any uv rectangle that is not inside one square: their union.
+    ValueRange range() const override {
+        ValueRange r = c0_->range();
+        r.include(c1_->range());
+        return r;
+    }
+    ValueRange range_uv(const Vec2& lo, const Vec2& hi) const override {
+        ValueRange r = c0_->range_uv(lo, hi);
+        r.include(c1_->range_uv(lo, hi));
+        return r;
+    }
 
 private:
     std::shared_ptr<Texture> c0_, c1_;
@@ -35,9 +51,7 @@ private:
 class BitmapTexture final : public Texture {
 public:
     BitmapTexture(std::vector<float> rgb, int w, int h, BitmapFilter f, WrapMode m, const UvTransform& t)
-        : rgb_(std::move(rgb)), w_(w), h_(h), filter_(f), wrap_(m), t_(t) {
-        for (float x : rgb_) max_ = std::max(max_, x);
-    }
+        : texels_(std::move(rgb), w, h, 1, 3), w_(w), h_(h), filter_(f), wrap_(m), t_(t) {}
     Rgb eval(const Vec2& uv_in) const override {
         Vec2 uv = t_.apply(uv_in);
         float x = uv.x * float(w_), y = uv.y * float(h_);
@@ -51,31 +65,38 @@ public:
         return texel(x0, y0) * ((1 - tx) * (1 - ty)) + texel(x0 + 1, y0) * (tx * (1 - ty)) +
                texel(x0, y0 + 1) * ((1 - tx) * ty) + texel(x0 + 1, y0 + 1) * (tx * ty);
     }
-    float max_value() const override { return max_; }
+    ValueRange range() const override { return texels_.global_range(); }
+    ValueRange range_uv(const Vec2& lo, const Vec2& hi) const override {
+        // The rectangle's image under to_uv (an affine map: its corners' bounding box), then the
+        // texels the filter reads there (bilinear: the two around x - 1/2 per axis).
+        float u0 = kInf, u1 = -kInf, v0 = kInf, v1 = -kInf;
+        for (int corner = 0; corner < 4; ++corner) {
+            Vec2 q = t_.apply(Vec2((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y));
+            u0 = std::min(u0, q.x), u1 = std::max(u1, q.x), v0 = std::min(v0, q.y), v1 = std::max(v1, q.y);
+        }
+        if (!(std::isfinite(u0) && std::isfinite(u1) && std::isfinite(v0) && std::isfinite(v1))) return range();
+        constexpr float kMargin = 1e-3f;  // texels: float rounding between this box and eval()
+        const float shift = filter_ == BitmapFilter::Bilinear ? 0.5f : 0.0f;
+        const int extra = filter_ == BitmapFilter::Bilinear ? 1 : 0;
+        constexpr float kLimit = 1e9f;  // far outside: wrap_interval covers the whole axis anyway
+        auto index = [&](float x) { return (long long)std::floor(std::clamp(x, -kLimit, kLimit)); };
+        long long ilo[3] = {index(u0 * w_ - shift - kMargin), index(v0 * h_ - shift - kMargin), 0};
+        long long ihi[3] = {index(u1 * w_ - shift + kMargin) + extra, index(v1 * h_ - shift + kMargin) + extra, 0};
+        ValueRange r = ValueRange::empty(3);
+        texels_.include_range_wrapped(ilo, ihi, wrap_, &r);
+        return r;
+    }
 
 private:
-    int wrap(int i, int n) const {
-        switch (wrap_) {
-            case WrapMode::Repeat: i %= n; return i < 0 ? i + n : i;
-            case WrapMode::Clamp: return std::clamp(i, 0, n - 1);
-            case WrapMode::Mirror: {
-                int p = i % (2 * n);
-                if (p < 0) p += 2 * n;
-                return p < n ? p : 2 * n - 1 - p;
-            }
-        }
-        return 0;
-    }
     Rgb texel(int x, int y) const {
-        size_t i = 3 * (size_t(wrap(y, h_)) * size_t(w_) + size_t(wrap(x, w_)));
-        return Rgb(rgb_[i], rgb_[i + 1], rgb_[i + 2]);
+        const float* t = texels_.at(wrap_index(x, w_, wrap_), wrap_index(y, h_, wrap_), 0);
+        return Rgb(t[0], t[1], t[2]);
     }
-    std::vector<float> rgb_;
+    SampleGrid texels_;  // row 0 = v 0
     int w_, h_;
     BitmapFilter filter_;
     WrapMode wrap_;
     UvTransform t_;
-    float max_ = 0;
 };
 
 }  // namespace

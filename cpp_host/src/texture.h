@@ -1,7 +1,9 @@
 // mfhost — textures, as Mitsuba 3 takes them wherever a plugin parameter is a texture:
 // a constant (<rgb>, <float>, <spectrum>), `checkerboard` (color0, color1, to_uv) and `bitmap`
 // (filename: PNG, JPEG or OpenEXR; filter_type bilinear|nearest, wrap_mode repeat|mirror|clamp,
-// raw, to_uv). Lookups use the surface's Mitsuba uv (SurfaceHit::uv).
+// raw, to_uv). Lookups use the surface's Mitsuba uv (SurfaceHit::uv). Range queries bound the
+// values over all uv or a uv rectangle (conservatively: they contain every value, per channel),
+// for majorants of spatially varying medium parameters (field.h).
 #pragma once
 
 #include <memory>
@@ -9,6 +11,7 @@
 #include <vector>
 
 #include "math.h"
+#include "sample_grid.h"
 
 namespace mf {
 
@@ -16,8 +19,19 @@ class Texture {
 public:
     virtual ~Texture() = default;
     virtual Rgb eval(const Vec2& uv) const = 0;
+    /// Per-channel bounds (3 channels) over all uv.
+    virtual ValueRange range() const = 0;
+    /// Per-channel bounds over the uv rectangle [uv_lo, uv_hi] (before to_uv); by default range().
+    virtual ValueRange range_uv(const Vec2& uv_lo, const Vec2& uv_hi) const {
+        (void)uv_lo;
+        (void)uv_hi;
+        return range();
+    }
     /// Largest value of any channel (bounds checks, e.g. reflectance <= 1).
-    virtual float max_value() const = 0;
+    float max_value() const {
+        ValueRange r = range();
+        return std::max(r.hi[0], std::max(r.hi[1], r.hi[2]));
+    }
     /// Non-null for a constant texture.
     virtual const Rgb* constant() const { return nullptr; }
 };
@@ -36,7 +50,6 @@ std::shared_ptr<Texture> make_constant_texture(const Rgb& value);
 std::shared_ptr<Texture> make_checkerboard_texture(std::shared_ptr<Texture> color0, std::shared_ptr<Texture> color1,
                                                    const UvTransform& to_uv);
 enum class BitmapFilter { Bilinear, Nearest };
-enum class WrapMode { Repeat, Mirror, Clamp };
 /// `rgb`: linear values, row 0 = v 0 (the image's top row, as Mitsuba stores it).
 std::shared_ptr<Texture> make_bitmap_texture(std::vector<float> rgb, int width, int height, BitmapFilter filter,
                                              WrapMode wrap, const UvTransform& to_uv);

@@ -531,7 +531,7 @@ private:
         return m;
     }
 
-    Property parse_property(const FileCtx& ctx, const pugi::xml_node& n, bool within_emitter) {
+    Property parse_property(const FileCtx& ctx, const pugi::xml_node& n, bool unbounded_rgb) {
         std::string k = n.name();
         Property p;
         p.loc = loc(ctx, n);
@@ -585,7 +585,7 @@ private:
             if (c.size() == 1) p.rgb = Rgb(float(c[0]));
             else if (c.size() == 3) p.rgb = Rgb(float(c[0]), float(c[1]), float(c[2]));
             else throw Error(p.loc, where + ": expected 1 or 3 components, got " + quote(v));
-            check_bounded(p, where, within_emitter);
+            check_bounded(p, where, unbounded_rgb);
         } else if (k == "spectrum") {
             p.type = PropType::Rgb;
             p.from_spectrum = true;
@@ -601,8 +601,8 @@ private:
 
     /// Mitsuba's RGB variants turn an <rgb> outside an emitter into an sRGB reflectance
     /// texture, which refuses components outside [0, 1] unless the name is an IOR.
-    static void check_bounded(const Property& p, const std::string& where, bool within_emitter) {
-        if (within_emitter || is_unbounded_spectrum(p.name)) return;
+    static void check_bounded(const Property& p, const std::string& where, bool unbounded_rgb) {
+        if (unbounded_rgb || is_unbounded_spectrum(p.name)) return;
         for (int c = 0; c < 3; ++c)
             if (p.rgb[c] < 0 || p.rgb[c] > 1)
                 throw Error(p.loc, where + ": RGB value outside [0, 1] (Mitsuba's RGB variants refuse it outside "
@@ -658,7 +658,9 @@ private:
         std::string k = c.name();
         if (kPropertyTags.count(k)) {
             if (at_root) throw Error(loc(ctx, c), "property <" + k + "> is not allowed directly inside <scene>");
-            Property p = parse_property(ctx, c, parent.tag == "emitter");
+            // Emitters' radiances and volumes' data (e.g. an anisotropy matrix's entries) are
+            // not reflectances: their <rgb> may leave [0, 1].
+            Property p = parse_property(ctx, c, parent.tag == "emitter" || parent.tag == "volume");
             if (!names.insert(p.name).second) {
                 SourceLoc first = parent.loc_of(p.name);
                 throw Error(p.loc, parent.describe() + ": parameter " + quote(p.name) +

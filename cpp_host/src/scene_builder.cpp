@@ -479,6 +479,7 @@ private:
     void build_shape(const std::shared_ptr<SceneObject>& op) {
         const SceneObject& o = *op;
         skip_if_broken(o);
+        const std::string& t = o.type;
         std::shared_ptr<Shape> shape = build_geometry(o);
 
         auto bsdfs = o.children_with_tag("bsdf");
@@ -643,6 +644,8 @@ private:
                                  ") f = " + std::to_string(f) + " (for a sphere of radius r: a boundary of radius >= r + k "
                                  "sigma; for a mesh: python3 -m macrofacet_mitsuba enclosure)");
         }
+    }
+
     /// The checks of a medium's spatially varying parameters that need its mean surface, and an
     /// sdfgrid's own: the grid must contain the whole medium region f < shell top.
     void check_mean_surface_fields(const MediumParamBag& bag, const Shape& shape) {

@@ -3,11 +3,13 @@
 
 #include <macrofacet.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "error.h"
 #include "medium.h"
+#include "sdf_grid.h"
 #include "shape.h"
 
 namespace mf {
@@ -41,6 +43,20 @@ std::shared_ptr<const MeanSurface> MeanSurface::of(const Shape& shape) {
         mf_mesh desc{positions.data(), m.p.size(), m.idx.data(), m.num_triangles(), normals.empty() ? nullptr : normals.data(),
                      uvs.empty() ? nullptr : uvs.data()};
         st = mf_surface_new_mesh(&desc, &handle);
+    } else if (auto* sdf = dynamic_cast<const SdfGridShape*>(&shape)) {
+        // The library takes object-unit values over the unit cube and a similarity to_world:
+        // divide the world distances by its scale.
+        const SdfGrid& g = sdf->grid();
+        const Mat4& w = g.to_world;
+        double det = w.m[0][0] * (w.m[1][1] * w.m[2][2] - w.m[1][2] * w.m[2][1]) - w.m[0][1] * (w.m[1][0] * w.m[2][2] - w.m[1][2] * w.m[2][0]) +
+                     w.m[0][2] * (w.m[1][0] * w.m[2][1] - w.m[1][1] * w.m[2][0]);
+        const double scale = std::cbrt(det);
+        std::vector<float> values(g.values.size());
+        for (size_t i = 0; i < values.size(); ++i) values[i] = float(double(g.values[i]) / scale);
+        mf_grid desc{values.data(), size_t(g.nx), size_t(g.ny), size_t(g.nz), {}};
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) desc.to_world[4 * r + c] = w.m[r][c];
+        st = mf_surface_new_grid(&desc, &handle);
     } else {
         throw Error(shape.loc, "<shape type=\"" + shape.kind() + "\">: cannot be the mean surface of a medium");
     }

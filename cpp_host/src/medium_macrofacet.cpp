@@ -8,12 +8,30 @@
 
 #include "library_abi.h"
 #include "mean_surface.h"
+#include "medium_field.h"
+#include "medium_fields.h"
 #include "medium_params.h"
 
 namespace mf {
 namespace {
 
 mf_frame frame_of(const MediumInteraction& mi) { return mf_frame{to_mf(mi.frame_n), to_mf(mi.frame_t)}; }
+
+/// The collision's local parameters in the event record (issue 12): set, sigma, alpha (3),
+/// anisotropy (6), reflectance scale (3).
+void store_local(const mf_local_params& l, MediumInteraction* mi) {
+    auto& r = mi->record;
+    r = {double(l.set), l.sigma, l.alpha.x, l.alpha.y, l.alpha.z, l.anisotropy[0], l.anisotropy[1], l.anisotropy[2],
+         l.anisotropy[3], l.anisotropy[4], l.anisotropy[5], l.reflectance_scale.r, l.reflectance_scale.g, l.reflectance_scale.b, 0, 0};
+}
+
+/// The local parameters of an event, or null when the medium's own hold there.
+const mf_local_params* load_local(const MediumInteraction& mi, mf_local_params* out) {
+    const auto& r = mi.record;
+    if (r[0] == 0) return nullptr;
+    *out = mf_local_params{uint32_t(r[0]), r[1], mf_vec3{r[2], r[3], r[4]}, {r[5], r[6], r[7], r[8], r[9], r[10]}, mf_rgb{r[11], r[12], r[13]}};
+    return out;
+}
 
 /// The library's phase function (seeds/000 Eq. 11 with the flakes' reflectance) in the frame the
 /// tracker returned with the collision. Host convention: `wo` points back along the incoming ray,
@@ -34,7 +52,8 @@ public:
     Rgb eval_pdf(const MediumInteraction& mi, const Vec3& wo, const Vec3& wi, float* pdf) const override {
         mf_frame fr = frame_of(mi);
         mf_phase_value v;
-        check(mf_phase_eval_pdf(h_, &fr, to_mf_unit(wo), to_mf_unit(wi), &v), "mf_phase_eval_pdf");
+        mf_local_params local;
+        check(mf_phase_eval_pdf_local(h_, load_local(mi, &local), &fr, to_mf_unit(wo), to_mf_unit(wi), &v), "mf_phase_eval_pdf");
         *pdf = float(v.pdf);
         return Rgb(float(v.value.r), float(v.value.g), float(v.value.b));
     }
@@ -44,7 +63,8 @@ public:
         for (double& x : u) x = double(sampler.next_1d());
         mf_frame fr = frame_of(mi);
         mf_phase_sample_result s;
-        check(mf_phase_sample(h_, &fr, to_mf_unit(wo), u, &s), "mf_phase_sample");
+        mf_local_params local;
+        check(mf_phase_sample_local(h_, load_local(mi, &local), &fr, to_mf_unit(wo), u, &s), "mf_phase_sample");
         if (!s.valid || !(s.pdf > 0)) return false;
         *wi = from_mf(s.wo);
         *pdf = float(s.pdf);
@@ -69,8 +89,9 @@ mf_track_query query(const Ray& ray, float t_max, Sampler& sampler) {
 // ----------------------------------------------------------------------------------------------
 // MacrofacetMedium
 
-MacrofacetMedium::MacrofacetMedium(mf_medium* handle, std::shared_ptr<const MeanSurface> surface, std::string label)
-    : handle_(handle), surface_(std::move(surface)), label_(std::move(label)) {
+MacrofacetMedium::MacrofacetMedium(mf_medium* handle, std::shared_ptr<const MeanSurface> surface, std::string label,
+                                   std::shared_ptr<const LibraryField> field)
+    : handle_(handle), surface_(std::move(surface)), field_(std::move(field)), label_(std::move(label)) {
     phase_ = std::make_shared<MacrofacetPhaseFn>(handle_, label_);
     if (mf_medium_shell_top(handle_, &top_) != MF_OK) {
         std::string msg = mf_last_error();
@@ -111,7 +132,9 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const Med
     *pdf_ratio = Rgb(1.0f);
     mf_track_query q = query(ray, t_max, sampler);
     mf_collision c;
-    if (mf_track_free_flight(handle_, surface_->handle(), nullptr, nullptr, &q, &c) != MF_OK)
+    const mf_field* field = field_ ? field_->handle() : nullptr;
+    void* user_data = field_ ? field_->user_data() : nullptr;
+    if (mf_track_free_flight(handle_, surface_->handle(), field, user_data, &q, &c) != MF_OK)
         throw Error(label_ + ": mf_track_free_flight failed: " + mf_last_error());
     count(c.stats);
     if (!c.scattered) return false;
@@ -121,6 +144,7 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const Med
     mi->frame_n = from_mf(c.frame.normal);
     mi->frame_t = from_mf(c.frame.tangent);
     mi->sdf_f = float(c.f);
+    store_local(c.local, mi);
     mi->medium = this;
     return true;
 }
@@ -128,7 +152,9 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const Med
 Rgb MacrofacetMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
     mf_track_query q = query(ray, t_max, sampler);
     mf_transmittance t;
-    if (mf_track_transmittance(handle_, surface_->handle(), nullptr, nullptr, &q, &t) != MF_OK)
+    const mf_field* field = field_ ? field_->handle() : nullptr;
+    void* user_data = field_ ? field_->user_data() : nullptr;
+    if (mf_track_transmittance(handle_, surface_->handle(), field, user_data, &q, &t) != MF_OK)
         throw Error(label_ + ": mf_track_transmittance failed: " + mf_last_error());
     count(t.stats);
     return Rgb(float(t.transmittance));
@@ -146,10 +172,37 @@ double MacrofacetMedium::sigma_t_at(const Vec3& p, const Vec3& d, Vec3* normal, 
 
 std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> surface) {
     if (bag.type != "macrofacet") throw Error(bag.loc, "not a macrofacet medium");
-    ParamsHandle params = bag_to_params(bag);
+    // Spatially varying parameters: the base medium takes each at its largest value (its sigma
+    // is then the region's), the field gives the local ones (medium_field.h).
+    MediumParamBag base = bag.fields ? stand_in_bag(bag) : bag;
+    // An anisotropy alone gives no scalar roughness: the base takes the largest one it reaches,
+    // sqrt(2) sigma_max / sqrt(lambda_min(Sigma)) (seeds/004 Eq. 25 with seeds/000 Eq. 4).
+    const Field* anisotropy = bag.fields ? bag.fields->find("anisotropy") : nullptr;
+    const bool has_roughness = base.get("alpha") || base.get("alpha_u") || base.get("lengthscale") || base.get("lengthscale_x");
+    if (anisotropy && !has_roughness) {
+        const ParamValue* s = base.get("sigma");
+        const double sigma = s ? s->f : std::sqrt(base.get("variance") ? base.get("variance")->f : 0.0);
+        const double lambda_min = double(anisotropy->range().lo[Field::kEigenMin]);
+        ParamValue alpha;
+        alpha.kind = ParamValue::Kind::Float;
+        alpha.f = lambda_min > 0 ? std::sqrt(2.0) * sigma / std::sqrt(lambda_min) : 1.0;
+        alpha.loc = anisotropy->loc();
+        base.params.emplace_back("alpha", alpha);
+    }
+    ParamsHandle params = bag_to_params(base);
     mf_medium* handle = nullptr;
-    if (mf_medium_new(params.get(), &handle) != MF_OK) throw medium_param_error(bag, mf_last_error());
-    return std::make_shared<MacrofacetMedium>(handle, std::move(surface), medium_label(bag));
+    if (mf_medium_new(params.get(), &handle) != MF_OK) throw medium_param_error(base, mf_last_error());
+    std::shared_ptr<const LibraryField> field;
+    if (bag.fields) {
+        const ParamValue* distribution = bag.get("distribution");
+        try {
+            field = std::make_shared<LibraryField>(bag, !distribution || distribution->s == "gpss");
+        } catch (...) {
+            mf_medium_free(handle);
+            throw;
+        }
+    }
+    return std::make_shared<MacrofacetMedium>(handle, std::move(surface), medium_label(bag), std::move(field));
 }
 
 }  // namespace mf

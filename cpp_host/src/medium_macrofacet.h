@@ -20,6 +20,7 @@ struct mf_track_stats;
 
 namespace mf {
 
+class LibraryField;
 class MeanSurface;
 
 /// Cumulative tracking counts of one medium (for benchmarks and tests).
@@ -30,7 +31,9 @@ struct TrackCounts {
 class MacrofacetMedium final : public Medium {
 public:
     /// Takes ownership of `handle` (freed with mf_medium_free in the destructor).
-    MacrofacetMedium(mf_medium* handle, std::shared_ptr<const MeanSurface> surface, std::string label);
+    /// `field`: the spatially varying parameters (null for a stationary medium).
+    MacrofacetMedium(mf_medium* handle, std::shared_ptr<const MeanSurface> surface, std::string label,
+                     std::shared_ptr<const LibraryField> field = nullptr);
     ~MacrofacetMedium() override;
     MacrofacetMedium(const MacrofacetMedium&) = delete;
     MacrofacetMedium& operator=(const MacrofacetMedium&) = delete;
@@ -57,6 +60,7 @@ private:
 
     mf_medium* handle_;
     std::shared_ptr<const MeanSurface> surface_;
+    std::shared_ptr<const LibraryField> field_;
     std::shared_ptr<PhaseFunction> phase_;
     double top_ = 0;
     std::string label_;
@@ -64,7 +68,8 @@ private:
 };
 
 /// Builds the macrofacet medium of a mean surface from its parameter bag (mf_params_* /
-/// mf_medium_new); throws mf::Error at the file:line of the offending parameter.
+/// mf_medium_new), with its spatially varying parameters as a library field; throws mf::Error at
+/// the file:line of the offending parameter.
 std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> surface);
 
 }  // namespace mf

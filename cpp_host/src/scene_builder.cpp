@@ -545,29 +545,13 @@ private:
                                                           "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
             if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium cannot be an emitter");
             shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
-            if (t == "sdfgrid" || mf_bag[0]->fields) {
-                // Validated here; rendered once the library takes local parameters and SDF grids.
-                if (!opts_.validate_only) {
-                    refuse_varying_fields(*mf_bag[0]);
-                    throw err(o, "an sdfgrid mean surface is validated but not rendered yet: it lands with the library's "
-                                 "SDF-grid surface (issue 12); mfrender --check validates such scenes");
-                }
-                MediumParamBag stand_in = stand_in_bag(*mf_bag[0]);
-                if (t == "sdfgrid") {
-                    if (kind == "gpis") create_gpis_medium(stand_in, nullptr);
-                    else create_macrofacet_medium(stand_in, nullptr);
-                    return;
-                }
+            if (kind == "gpis" && mf_bag[0]->fields) {
+                // Validated here; rendered once the gpis ground truth takes the fields.
+                if (!opts_.validate_only) refuse_varying_fields(*mf_bag[0]);
                 auto surface = MeanSurface::of(*shape);
-                if (kind == "gpis") {
-                    auto g = create_gpis_medium(stand_in, surface);
-                    scene_->media.push_back(g);
-                    scene_->add_shape(make_region_boundary(shape, *surface, g->envelope(), g));
-                } else {
-                    auto m = create_macrofacet_medium(stand_in, surface);
-                    scene_->media.push_back(m);
-                    scene_->add_shape(make_region_boundary(shape, *surface, m->shell_top(), m));
-                }
+                auto g = create_gpis_medium(stand_in_bag(*mf_bag[0]), surface);
+                scene_->media.push_back(g);
+                scene_->add_shape(make_region_boundary(shape, *surface, g->envelope(), g));
                 return;
             }
             auto surface = MeanSurface::of(*shape);

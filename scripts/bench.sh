@@ -49,6 +49,7 @@ r="bench/anchor.xml -D res=256 -D spp=16 --threads 1 --quiet -o $out/pair.exr"
 echo "== tracking targets: CPU-time ratios, median of 3 alternated pairs, 1 thread"
 paired_ratio "sphere thin shell / roughconductor (target <= 1.5)" "$mfrender $r -D object=macrofacet" "$mfrender $r -D object=roughconductor"
 paired_ratio "torus thin shell / roughconductor (target <= 2)" "$mfrender $r -D object=torus_macrofacet" "$mfrender $r -D object=torus_roughconductor"
+paired_ratio "torus thin shell, sigma varying +-20 % / stationary (target <= 1.5)" "$mfrender $r -D object=torus_varying" "$mfrender $r -D object=torus_macrofacet"
 g="bench/gpis_compare.xml -D spp=32 -D res=96 --threads 1 --quiet -o $out/pair.exr"
 paired_ratio "gpis / macrofacet at equal spp (equal MSE: compare_gpis.sh)" "$mfrender $g -D method=gpis" "$mfrender $g -D method=macrofacet"
 start=$(date +%s%N)

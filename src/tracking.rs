@@ -79,6 +79,10 @@ const MAX_SEGMENTS: u32 = 1 << 16;
 /// [`MAX_SHORTENINGS`] times): loose bounds cost tentative collisions.
 const LOOSENESS_SIGMAS: f64 = 1.0;
 const MAX_SHORTENINGS: u32 = 4;
+/// A field's `σ` range may halve a segment this many times, until its majorant factor
+/// `(σ_hi/σ_lo)²` is at most [`MAX_DENSITY_FACTOR`] or stops falling.
+const MAX_FIELD_SHORTENINGS: u32 = 6;
+const MAX_DENSITY_FACTOR: f64 = 1.5;
 /// Lipschitz steps above the shell per segment (each one surface query).
 const MAX_SKIPS: u32 = 64;
 /// Default reach of a segment, in σ of change of `f` (covers the shell from its top to deep
@@ -323,6 +327,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let sigma = self.height().sigma;
         let mut length = self.segment_length(start, d, previous).min(remaining);
         let mut shortenings = 0;
+        let (mut field_shortenings, mut last_factor) = (0, f64::INFINITY);
         loop {
             stats.segments += 1;
             let mut bound = self.surface.bound(start, p, d, length, LOOSENESS_SIGMAS * sigma, cache)?;
@@ -355,6 +360,16 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 ParamBounds::default()
             };
             let shape = HeightProfile { sigma: params.sigma.map_or(self.medium.height.sigma, |s| s[1]), ..self.medium.height };
+            // A wide range of σ inflates the majorant by (σ_hi/σ_lo)²: shorter segments see a
+            // narrower range (unless the segment lies above the shell, where nothing scatters),
+            // as long as halving helps (a field's own resolution sets a floor).
+            let (factor, above) = (params.density_factor(), bound.f_lo[0].min(bound.f_lo[1]) > shape.top());
+            if factor > MAX_DENSITY_FACTOR && factor < 0.95 * last_factor && !above && field_shortenings < MAX_FIELD_SHORTENINGS && bound.length == length {
+                field_shortenings += 1;
+                last_factor = factor;
+                length = 0.5 * bound.length;
+                continue;
+            }
             let s_up = match params.alpha {
                 Some([_, hi]) => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi)).upper(bound.cos),
                 None => self.area.upper(bound.cos),

@@ -11,10 +11,16 @@
 namespace mf {
 namespace {
 
+/// The user_data of one mf_gpis_trace, shared by the mean's and the field's callbacks.
+struct TraceContext {
+    const mf_surface* surface;
+    const GpisField* field;  // null without a field
+};
+
 /// mf_sdf_fn over the library's mean surface: its signed distance and frame normal (world
 /// space). A failure is reported as NaN, which makes the trace fail with a status.
 extern "C" void mean_sdf_callback(void* user_data, mf_vec3 p, mf_sdf_sample* out) {
-    const mf_surface* surface = static_cast<const mf_surface*>(user_data);
+    const mf_surface* surface = static_cast<const TraceContext*>(user_data)->surface;
     mf_surface_point s;
     if (mf_surface_eval(surface, nullptr, p, &s) == MF_OK) {
         out->f = s.f;
@@ -23,6 +29,17 @@ extern "C" void mean_sdf_callback(void* user_data, mf_vec3 p, mf_sdf_sample* out
         out->f = std::numeric_limits<double>::quiet_NaN();
         out->gradient = mf_vec3{0, 0, 0};
     }
+}
+
+/// The medium's mf_field: forwards to the host field's callbacks with its own data.
+extern "C" int32_t field_at_callback(void* user_data, mf_vec3 p, const mf_surface_point* point, mf_local_params* out) {
+    const GpisField* f = static_cast<const TraceContext*>(user_data)->field;
+    return f->callbacks.at(f->user_data, p, point, out);
+}
+
+extern "C" int32_t field_bounds_callback(void* user_data, mf_vec3 p, mf_vec3 d, double length, mf_param_bounds* out) {
+    const GpisField* f = static_cast<const TraceContext*>(user_data)->field;
+    return f->callbacks.bounds(f->user_data, p, d, length, out);
 }
 
 mf_vec3 unit_d(const Vec3& v) {
@@ -53,17 +70,32 @@ private:
 
 }  // namespace
 
-GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label)
+GpisMedium::GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label,
+                       const GpisField* field)
     : handle_(handle), mean_(std::move(mean)), label_(std::move(label)) {
     phase_ = std::make_shared<GpisPhase>(this);
-    if (mf_gpis_envelope(handle_, &envelope_) != MF_OK || !(envelope_ > 0)) {
-        std::string msg = mf_last_error();
+    std::string msg;
+    if (field) {
+        host_field_ = *field;
+        const mf_field_callbacks forward{field_at_callback, field_bounds_callback, field->callbacks.sigma_max};
+        if (!field->callbacks.at || !field->callbacks.bounds)
+            msg = "the field needs both callbacks (at, bounds)";
+        else if (mf_field_new_callbacks(&forward, &field_) != MF_OK)
+            msg = std::string("mf_field_new_callbacks failed: ") + mf_last_error();
+    }
+    if (msg.empty() && (mf_gpis_envelope(handle_, field_, &envelope_) != MF_OK || !(envelope_ > 0)))
+        msg = std::string("mf_gpis_envelope failed: ") + mf_last_error();
+    if (!msg.empty()) {
+        mf_field_free(field_);
         mf_gpis_free(handle_);
-        throw Error(label_ + ": mf_gpis_envelope failed: " + msg);
+        throw Error(label_ + ": " + msg);
     }
 }
 
-GpisMedium::~GpisMedium() { mf_gpis_free(handle_); }
+GpisMedium::~GpisMedium() {
+    mf_field_free(field_);
+    mf_gpis_free(handle_);
+}
 
 bool GpisMedium::trace(const Vec3& o, const Vec3& d, double t_max, const GpisStart& start, uint64_t seed,
                        GpisHit* hit) const {
@@ -81,14 +113,15 @@ bool GpisMedium::trace(const Vec3& o, const Vec3& d, double t_max, const GpisSta
     }
     mf_gpis_hit h;
     const double tm = std::isfinite(t_max) ? t_max : std::numeric_limits<double>::infinity();
-    if (mf_gpis_trace(handle_, mean_sdf_callback, const_cast<mf_surface*>(mean_->handle()), origin, unit_d(d), tm, &st,
-                      seed, &h) != MF_OK)
+    TraceContext context{mean_->handle(), field_ ? &host_field_ : nullptr};
+    if (mf_gpis_trace(handle_, mean_sdf_callback, field_, &context, origin, unit_d(d), tm, &st, seed, &h) != MF_OK)
         throw Error(label_ + ": mf_gpis_trace failed: " + mf_last_error());
     if (!h.hit) return false;
     hit->t = h.t;
     hit->p[0] = h.point.x, hit->p[1] = h.point.y, hit->p[2] = h.point.z;
     hit->normal[0] = h.normal.x, hit->normal[1] = h.normal.y, hit->normal[2] = h.normal.z;
     hit->gradient[0] = h.gradient.x, hit->gradient[1] = h.gradient.y, hit->gradient[2] = h.gradient.z;
+    hit->local = h.local;
     return true;
 }
 
@@ -96,7 +129,7 @@ bool GpisMedium::scatter(const Vec3& wo, const GpisHit& hit, Vec3* wi, Rgb* weig
     double nx = hit.normal[0], ny = hit.normal[1], nz = hit.normal[2], l = std::sqrt(nx * nx + ny * ny + nz * nz);
     if (!(l > 0)) return false;
     mf_phase_sample_result s;
-    if (mf_gpis_scatter(handle_, unit_d(wo), mf_vec3{nx / l, ny / l, nz / l}, &s) != MF_OK)
+    if (mf_gpis_scatter(handle_, &hit.local, unit_d(wo), mf_vec3{nx / l, ny / l, nz / l}, &s) != MF_OK)
         throw Error(label_ + ": mf_gpis_scatter failed: " + mf_last_error());
     if (!s.valid) return false;
     *wi = Vec3(float(s.wo.x), float(s.wo.y), float(s.wo.z));
@@ -123,7 +156,8 @@ Rgb GpisMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) con
     return trace(ray.o, ray.d, t_max, GpisStart(), sampler.next_u64(), &h) ? Rgb(0.0f) : Rgb(1.0f);
 }
 
-std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean) {
+std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean,
+                                               const GpisField* field) {
     if (bag.type != "gpis") throw Error(bag.loc, "not a gpis medium");
     mf_params* params = bag_to_params(bag, nullptr);
     mf_gpis* handle = nullptr;
@@ -131,7 +165,7 @@ std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::s
     std::string msg = st == MF_OK ? std::string() : mf_last_error();
     mf_params_free(params);
     if (st != MF_OK) throw medium_param_error(bag, msg);
-    return std::make_shared<GpisMedium>(handle, std::move(mean), medium_label(bag));
+    return std::make_shared<GpisMedium>(handle, std::move(mean), medium_label(bag), field);
 }
 
 }  // namespace mf

@@ -11,6 +11,11 @@
 // (mf_gpis_scatter), after which the next segment starts ON_SURFACE with the hit's sampled
 // gradient (Renewal+ memory; Renewal ignores it). Shadow rays crossing the region trace a fresh
 // realization (START_FREE): a hit occludes (transmittance 0), a miss transmits (1).
+//
+// Spatially varying parameters (issue 12): an optional GpisField (the host's field callbacks and
+// their data) makes the kernel the non-stationary one of seeds/004 Eqs. 25-26 with the field's
+// local parameters, as the macrofacet medium reads them; the band widens to shell_extent times
+// the field's sigma_max, and each hit carries the field's parameters to its reflection.
 #pragma once
 
 #include <macrofacet.h>
@@ -31,6 +36,7 @@ struct GpisHit {
     double p[3] = {0, 0, 0};
     double normal[3] = {0, 0, 1};
     double gradient[3] = {0, 0, 1};
+    mf_local_params local{};  // the field's parameters at the crossing (set = 0: the medium's own)
     Vec3 point() const { return Vec3(float(p[0]), float(p[1]), float(p[2])); }
     Vec3 n() const { return Vec3(float(normal[0]), float(normal[1]), float(normal[2])); }
 };
@@ -43,10 +49,21 @@ struct GpisStart {
     double gradient[3] = {0, 0, 1};
 };
 
+/// A field of local parameters for a gpis medium: the host's callbacks (as for
+/// mf_field_new_callbacks; both required) and the data they are called with. The library calls
+/// the mean's and the field's callbacks of a trace with one user_data, so the medium wraps these
+/// in its own mf_field; `user_data` must outlive the medium and the callbacks be thread-safe.
+struct GpisField {
+    mf_field_callbacks callbacks{};
+    void* user_data = nullptr;
+};
+
 class GpisMedium final : public Medium {
 public:
-    /// Takes ownership of `handle` (freed with mf_gpis_free in the destructor).
-    GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label);
+    /// Takes ownership of `handle` (freed with mf_gpis_free in the destructor). `field` (optional,
+    /// copied) makes the parameters vary in space; throws mf::Error if the library refuses it.
+    GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label,
+               const GpisField* field = nullptr);
     ~GpisMedium() override;
     GpisMedium(const GpisMedium&) = delete;
     GpisMedium& operator=(const GpisMedium&) = delete;
@@ -55,7 +72,8 @@ public:
     /// true and *hit on the first entering crossing.
     bool trace(const Vec3& o, const Vec3& d, double t_max, const GpisStart& start, uint64_t seed, GpisHit* hit) const;
     /// Delta reflection of wo (pointing away from the hit, = -ray.d) about the hit normal:
-    /// *wi and the RGB weight (Fresnel × specular_reflectance). False if invalid.
+    /// *wi and the RGB weight (Fresnel × specular_reflectance × the hit's reflectance_scale).
+    /// False if invalid.
     bool scatter(const Vec3& wo, const GpisHit& hit, Vec3* wi, Rgb* weight) const;
 
     /// Generic-interface fallbacks (the integrator uses trace/scatter directly): a free flight is
@@ -74,6 +92,8 @@ public:
 
 private:
     mf_gpis* handle_;
+    mf_field* field_ = nullptr;  // wraps host_field_ (null: stationary)
+    GpisField host_field_;
     std::shared_ptr<const MeanSurface> mean_;
     std::shared_ptr<PhaseFunction> phase_;
     double envelope_ = 0;
@@ -81,7 +101,9 @@ private:
 };
 
 /// The gpis hook: parameter bag -> mf_params -> mf_gpis_new (same bag conversion and error
-/// locations as the macrofacet hook). Throws mf::Error at the offending parameter's line.
-std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean);
+/// locations as the macrofacet hook), with an optional field. Throws mf::Error at the offending
+/// parameter's line.
+std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean,
+                                               const GpisField* field = nullptr);
 
 }  // namespace mf

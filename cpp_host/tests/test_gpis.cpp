@@ -14,13 +14,20 @@
 //    (grazing the mean surface) sometimes (0 < mean T < 1, N = 2000).
 //  * determinism_gpis: a floor, an area light, a gold gpis sphere: bit-identical EXR for the same
 //    seed with 1 and 2 threads; a different seed gives a different image.
+//  * gpis_field_plumbing: a host field built here (GpisField) reaches the library: a field that
+//    sets nothing gives bit-identical hits; a field whose sigma steps across x = 0 widens the band
+//    to 6 sigma_max, reports its sigma at the hits, and halves the reflection where its
+//    reflectance scale is one half; a failing field and a field without callbacks throw.
+#include <cstring>
 #include <vector>
 
 #include "check.h"
 #include "integrator.h"
+#include "mean_surface.h"
 #include "medium_gpis.h"
 #include "scene_builder.h"
 #include "scene_util.h"
+#include "shape.h"
 
 using namespace mf;
 
@@ -115,6 +122,114 @@ TEST_CASE(determinism_gpis) {
     CHECK(fa == read_file(b));
     CHECK(fa == read_file(c));
     CHECK(fa != read_file(d));
+}
+
+namespace {
+
+/// A host field: sigma 0.01 for x < 0 and 0.03 (with a reflectance scale of one half) for
+/// x >= 0 (mode 0), nothing set (mode 1), a failure (mode 2). Counts its calls (the traces here
+/// run on one thread).
+struct StepField {
+    int mode = 0;
+    int calls = 0;
+};
+
+extern "C" int32_t step_field_at(void* user_data, mf_vec3 p, const mf_surface_point*, mf_local_params* out) {
+    auto* field = static_cast<StepField*>(user_data);
+    ++field->calls;
+    std::memset(out, 0, sizeof *out);
+    if (field->mode == 2) return 3;
+    if (field->mode == 0) {
+        out->set = MF_LOCAL_SIGMA;
+        out->sigma = p.x < 0 ? 0.01 : 0.03;
+        if (p.x >= 0) {
+            out->set |= MF_LOCAL_REFLECTANCE_SCALE;
+            out->reflectance_scale = mf_rgb{0.5, 0.5, 0.5};
+        }
+    }
+    return 0;
+}
+
+extern "C" int32_t step_field_bounds(void*, mf_vec3, mf_vec3, double, mf_param_bounds* out) {
+    out->set = MF_LOCAL_SIGMA;
+    out->sigma_lo = 0.01, out->sigma_hi = 0.03, out->alpha_lo = out->alpha_hi = 0;
+    return 0;
+}
+
+MediumParamBag gold_gpis_bag() {
+    MediumParamBag bag;
+    bag.type = "gpis";
+    bag.id = "g";
+    auto number = [](double x) {
+        ParamValue v;
+        v.kind = ParamValue::Kind::Float;
+        v.f = x;
+        return v;
+    };
+    ParamValue au;
+    au.kind = ParamValue::Kind::String;
+    au.s = "Au";
+    bag.params = {{"sigma", number(0.02)}, {"alpha", number(0.5)}, {"material", au}};
+    return bag;
+}
+
+}  // namespace
+
+TEST_CASE(gpis_field_plumbing) {
+    SphereShape sphere(Vec3(0, 0, 0), 0.5f, false);
+    auto surface = MeanSurface::of(sphere);
+    const MediumParamBag bag = gold_gpis_bag();
+    StepField own_data{1, 0}, step_data{0, 0}, failing_data{2, 0};
+    const GpisField own{{step_field_at, step_field_bounds, 0.0}, &own_data};
+    const GpisField stepped{{step_field_at, step_field_bounds, 0.03}, &step_data};
+    const GpisField failing{{step_field_at, step_field_bounds, 0.03}, &failing_data};
+    auto plain = create_gpis_medium(bag, surface);
+    auto through_own = create_gpis_medium(bag, surface, &own);
+    auto varying = create_gpis_medium(bag, surface, &stepped);
+    CHECK_NEAR(plain->envelope(), 6 * 0.02, 1e-12);
+    CHECK_NEAR(through_own->envelope(), 6 * 0.02, 1e-12);
+    CHECK_NEAR(varying->envelope(), 6 * 0.03, 1e-12);
+
+    // Nothing set: the same realizations, bit for bit.
+    const Vec3 down(0, 0, -1);
+    int identical = 0;
+    for (uint64_t seed = 0; seed < 50; ++seed) {
+        const Vec3 o(0.1f, 0.05f, 1.0f);
+        GpisHit a, b;
+        const bool ha = plain->trace(o, down, kInf, GpisStart(), seed, &a), hb = through_own->trace(o, down, kInf, GpisStart(), seed, &b);
+        identical += ha && hb && a.t == b.t && std::memcmp(a.gradient, b.gradient, sizeof a.gradient) == 0 && b.local.set == 0;
+    }
+    CHECK_MSG(identical == 50, "a field that sets nothing changed " + std::to_string(50 - identical) + " of 50 hits");
+    CHECK(own_data.calls > 0);
+
+    // The stepped field: its sigma at the hits on either side, and half the reflection where
+    // its reflectance scale is one half (same direction).
+    int left = 0, right = 0, halved = 0;
+    for (uint64_t seed = 0; seed < 40; ++seed) {
+        const float x = seed % 2 ? 0.2f : -0.2f;
+        GpisHit h;
+        if (!varying->trace(Vec3(x, 0, 1), down, kInf, GpisStart(), seed, &h)) continue;
+        const bool on_right = h.p[0] >= 0;
+        left += !on_right && h.local.sigma == 0.01;
+        right += on_right && h.local.sigma == 0.03;
+        GpisHit unscaled = h;
+        unscaled.local = mf_local_params{};
+        Vec3 wi_a, wi_b;
+        Rgb wa, wb;
+        const Vec3 wo = h.n();
+        if (varying->scatter(wo, h, &wi_a, &wa) && varying->scatter(wo, unscaled, &wi_b, &wb))
+            halved += on_right ? std::fabs(wa.r - 0.5f * wb.r) < 1e-6f : wa.r == wb.r;
+    }
+    CHECK_MSG(left == 20 && right == 20, "local sigma at the hits: " + std::to_string(left) + " left, " + std::to_string(right) + " right of 20");
+    CHECK_MSG(halved == 40, "reflectance scale applied at " + std::to_string(halved) + " of 40 hits");
+
+    // A failing field fails the trace with the library's message; a field without callbacks is
+    // refused at construction.
+    auto broken = create_gpis_medium(bag, surface, &failing);
+    GpisHit h;
+    CHECK_THROWS_WITH(broken->trace(Vec3(0, 0, 1), down, kInf, GpisStart(), 1, &h), "returned 3");
+    const GpisField incomplete{{nullptr, step_field_bounds, 0.0}, &own_data};
+    CHECK_THROWS_WITH(create_gpis_medium(bag, surface, &incomplete), "both callbacks");
 }
 
 TEST_MAIN()

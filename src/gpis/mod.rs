@@ -11,6 +11,13 @@
 //! `α_i = √2 σ / l_i`. Each realization's zero level set is one surface; its normals are
 //! `∇f/|∇f|` (seeds/004 Sec. 3.2), pointing outward.
 //!
+//! With a field ([`GpisTracer::with_field`], the [`MediumField`] the macrofacet tracker takes)
+//! the kernel is the non-stationary kernel of seeds/004 Eqs. 25–26 whose local `σ(x)` and
+//! anisotropy `Σ(x)` the field gives ([`FieldKernel`], which says how `sigma`, `alpha` and
+//! `anisotropy` map to it). The march is the same; its steps follow the local kernel, the
+//! envelope is drawn at the field's `sigma_max`, and each observation keeps its point's local
+//! kernel ([`Covariance::Local`]).
+//!
 //! ## Ray marching in function space (seeds/004 Sec. 4.2, Algorithm 1, Fig. 8)
 //! [`GpisTracer::trace`] follows the ray `x(t) = o + t d` (`d` = *propagation* direction, unit):
 //! 1. **Envelope.** While the mean is above the envelope `μ > E σ` (`E` =
@@ -88,6 +95,21 @@
 //!   normals by about −0.004 in the mean normal (3–4 standard errors against a brute-force
 //!   sampler in the validation report): it misses crossings where a realization just grazes the
 //!   ray between samples. Use `step_correlation = 0.99` for grazing normals.
+//!
+//! ## With fields (`tests/gpis_fields.rs`)
+//! - Gram matrices of values and gradients on random point sets (smooth anisotropy, smooth
+//!   roughness, stepped σ and α, height fields) have no eigenvalue below −3e-17 × the largest;
+//!   the kernel without Eq. 25's prefactor gives −6e-2. Derivative covariances match finite
+//!   differences of the kernel to 5e-8. Realizations' covariance across a step and a ramp
+//!   matches the kernel within 2.4 SE (300 pairs).
+//! - A field of the medium's own (or of constant) parameters gives the stationary crossings bit
+//!   for bit; so does a piecewise-constant field for rays that stay in one region.
+//! - Planar GPSS, σ 0.5 | 1 across `x = 0` at fixed `α = 1`, 45°: per region and across a ramp
+//!   11 lengthscales wide, realizations vs the macrofacet tracker with the same field differ as
+//!   in the stationary case (≤ 0.015 down to the mean plane). Across a sharp step the
+//!   realizations jump (Eq. 25's `σ(x)σ(y)`): going up the step their transmittance falls 0.16
+//!   below the tracker's just past it (z ≈ −45), going down it rises up to 0.045 above (z ≈ +11)
+//!   — cliffs that the local-stationary medium `ρ(f; σ(x))` does not represent.
 
 mod experiments;
 mod kernel;
@@ -102,7 +124,7 @@ pub use kernel::{Covariance, Functional, SeKernel};
 pub use mean::{MeanSdf, Plane, Sphere};
 pub use nonstationary::{sigma_max, FieldKernel, LocalKernel};
 
-use crate::error::Result;
+use crate::error::{Error, ErrorKind, Result};
 use crate::field::{Constant, LocalParams, MediumField};
 use crate::special::{ln_normal_cdf, probit, probit_of_ln};
 use glam::DVec3;
@@ -460,11 +482,21 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
     /// only when the field does (a callback's failure, invalid parameters, a `σ` above its
     /// `sigma_max`).
     pub fn trace(&self, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Result<Trace> {
-        if self.field.varies() {
-            self.march(&FieldKernel::new(self.kernel, self.mean, self.field), origin, d, t_max, start, uniform)
-        } else {
-            self.march(&self.kernel, origin, d, t_max, start, uniform)
+        if !self.field.varies() {
+            return self.march(&self.kernel, origin, d, t_max, start, uniform);
         }
+        let trace = self.march(&FieldKernel::new(self.kernel, self.mean, self.field), origin, d, t_max, start, uniform)?;
+        // Lengthscales or variances at the ends of f64's range make the conditional laws
+        // overflow; such a crossing is an error, never a NaN.
+        if let Trace::Hit(c) = trace {
+            if !(c.t.is_finite() && c.point.is_finite() && c.gradient.is_finite()) {
+                return Err(Error::new(
+                    ErrorKind::InvalidArgument,
+                    format!("the gpis field's parameters near {} make the process degenerate (crossing {c:?})", c.point),
+                ));
+            }
+        }
+        Ok(trace)
     }
 
     fn march<K: Covariance>(&self, kernel: &K, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Result<Trace> {

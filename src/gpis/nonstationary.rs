@@ -220,8 +220,13 @@ impl<M: MeanSdf, F: MediumField> Covariance for FieldKernel<'_, M, F> {
         }
         let m = self.random_axes;
         let r = (a.point() - b.point()) * m;
+        let diagonal = |m: DMat3| DVec3::new(m.x_axis.x, m.y_axis.y, m.z_axis.z);
         let (s_inv, prefactor) = if same {
             (la.inverse, 1.0)
+        } else if la.stationary.is_some() && lb.stationary.is_some() {
+            // Two roughness forms: S is diagonal.
+            let s = (diagonal(la.matrix) + diagonal(lb.matrix)) * 0.5;
+            (DMat3::from_diagonal(DVec3::ONE / s), (la.det * lb.det).sqrt().sqrt() / s.element_product().sqrt())
         } else {
             let s = (la.matrix + lb.matrix) * 0.5;
             (s.inverse(), (la.det * lb.det).sqrt().sqrt() / s.determinant().sqrt())

@@ -328,6 +328,12 @@ typedef struct mf_phase_value {
 typedef struct mf_sdf_sample {
   double f;
   struct mf_vec3 gradient;
+  /**
+   * Texture coordinates of the mean surface's closest point (for fields painted over it; the
+   * library sets 0 before the call, a host may leave them).
+   */
+  double u;
+  double v;
 } mf_sdf_sample;
 
 /**
@@ -349,7 +355,8 @@ typedef struct mf_gpis_start {
  * The first entering crossing of a realization: `hit` false when the ray leaves the band of the
  * mean surface or reaches `t_max` first (the other fields are then zero). `normal` is outward
  * (`normal . d < 0`); `gradient` is the sampled, unnormalised gradient to pass on to the next
- * segment's [`mf_gpis_start`].
+ * segment's [`mf_gpis_start`]; `local` the field's parameters at the crossing (`set = 0`
+ * without a field), for [`mf_gpis_scatter`].
  */
 typedef struct mf_gpis_hit {
   bool hit;
@@ -357,6 +364,7 @@ typedef struct mf_gpis_hit {
   struct mf_vec3 point;
   struct mf_vec3 normal;
   struct mf_vec3 gradient;
+  struct mf_local_params local;
 } mf_gpis_hit;
 
 /**
@@ -650,23 +658,31 @@ void mf_gpis_free(struct mf_gpis *gpis);
 
 /**
  * The half-width of the band around the mean surface where realizations are sampled
- * (`shell_extent * sigma`, scene units): rays may start at `f = envelope` with
- * `MF_GPIS_START_FREE`.
+ * (`shell_extent * sigma`, scene units; with a `field`, `shell_extent * sigma_max` of the
+ * field, NULL: stationary): rays may start at `f = envelope` with `MF_GPIS_START_FREE`.
  *
  * # Safety
  * Pointers must be NULL or valid.
  */
-enum mf_status mf_gpis_envelope(const struct mf_gpis *gpis, double *out_envelope);
+enum mf_status mf_gpis_envelope(const struct mf_gpis *gpis,
+                                const struct mf_field *field,
+                                double *out_envelope);
 
 /**
  * Realizes the GPIS along `origin + t d`, `0 < t <= t_max` (+inf allowed), and returns its first
- * entering crossing. `sdf(user_data, p, out)` supplies the mean; `seed` the random stream.
+ * entering crossing. `sdf(user_data, p, out)` supplies the mean; `field` (NULL for a stationary
+ * GPIS) the kernel's local parameters, its callbacks called with the same `user_data`; `seed`
+ * the random stream. Errors: invalid arguments, a NaN/infinite mean, a field callback's
+ * failure (`MF_ERROR_CALLBACK`) or invalid parameters (a `sigma` above the field's
+ * `sigma_max`, a non-positive-definite anisotropy, ...) — nothing is written then.
  *
  * # Safety
- * Pointers must be NULL or valid; `sdf` must be safe to call with `user_data` from this thread.
+ * Pointers must be NULL or valid; `sdf` and the field's callbacks must be safe to call with
+ * `user_data` from this thread.
  */
 enum mf_status mf_gpis_trace(const struct mf_gpis *gpis,
                              mf_sdf_fn sdf,
+                             const struct mf_field *field,
                              void *user_data,
                              struct mf_vec3 origin,
                              struct mf_vec3 d,
@@ -676,14 +692,16 @@ enum mf_status mf_gpis_trace(const struct mf_gpis *gpis,
                              struct mf_gpis_hit *out_hit);
 
 /**
- * Specular reflection at a crossing: `wi` (pointing away, `wi = -d`) about the unit `normal`.
- * The result's `pdf` is 0: the reflection is a delta, so it takes no part in MIS. `valid` is
- * false when `wi` lies behind the normal.
+ * Specular reflection at a crossing: `wi` (pointing away, `wi = -d`) about the unit `normal`,
+ * with the field's parameters there (`*local`, as the hit reported them; NULL: the GPIS's own):
+ * their `reflectance_scale` scales the reflectance. The result's `pdf` is 0: the reflection is
+ * a delta, so it takes no part in MIS. `valid` is false when `wi` lies behind the normal.
  *
  * # Safety
  * Pointers must be NULL or valid.
  */
 enum mf_status mf_gpis_scatter(const struct mf_gpis *gpis,
+                               const struct mf_local_params *local,
                                struct mf_vec3 wi,
                                struct mf_vec3 normal,
                                struct mf_phase_sample_result *out_sample);

@@ -9,6 +9,8 @@ scripts/setup.sh
 
 echo "== core queries (cargo run --release --example bench_core)"
 cargo run --release --quiet --example bench_core
+echo "== varying parameters: gpis vs macrofacet (cargo run --release --example bench_core fields)"
+cargo run --release --quiet --example bench_core fields
 
 build_dir=build/bench
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMF_BUILD_TESTS=OFF >/dev/null

@@ -10,6 +10,7 @@
 //! `p(wi, wo) = F D(m) / (4 σ(-wi))`. Reciprocity holds for the BRDF that emerges from a slab,
 //! not event by event.
 
+use crate::error::{Error, ErrorKind, Result};
 use crate::ndf::{BeckmannUniformMixture, MicrofacetDistribution, Ndf};
 use crate::fresnel::fresnel_conductor_rgb;
 use crate::Rgb;
@@ -37,7 +38,7 @@ pub enum MicroBsdf {
 
 impl MicroBsdf {
     /// Reflectance of a specular flake for an incident cosine; `None` for diffuse flakes.
-    fn specular(&self, cos_i: f64) -> Option<Rgb> {
+    pub(crate) fn specular(&self, cos_i: f64) -> Option<Rgb> {
         match *self {
             MicroBsdf::Mirror { specular_reflectance } => Some(specular_reflectance),
             MicroBsdf::Conductor { eta, k, specular_reflectance } => {
@@ -46,6 +47,25 @@ impl MicroBsdf {
             }
             MicroBsdf::Diffuse { .. } => None,
         }
+    }
+
+    /// The flake with its reflectance multiplied per channel by `scale` (a field's
+    /// `reflectance_scale`, [`crate::field::LocalParams`]); the product must stay within `[0, 1]`
+    /// (energy conservation of the flake).
+    pub fn with_reflectance_scale(&self, scale: Rgb) -> Result<MicroBsdf> {
+        let scaled = |r: Rgb| -> Result<Rgb> {
+            let s = [0, 1, 2].map(|c| r[c] * scale[c]);
+            if s.iter().all(|c| (0.0..=1.0).contains(c)) {
+                Ok(s)
+            } else {
+                Err(Error::new(ErrorKind::InvalidArgument, format!("reflectance_scale {scale:?} takes the flakes' reflectance {r:?} outside [0, 1]")))
+            }
+        };
+        Ok(match *self {
+            MicroBsdf::Mirror { specular_reflectance } => MicroBsdf::Mirror { specular_reflectance: scaled(specular_reflectance)? },
+            MicroBsdf::Conductor { eta, k, specular_reflectance } => MicroBsdf::Conductor { eta, k, specular_reflectance: scaled(specular_reflectance)? },
+            MicroBsdf::Diffuse { reflectance } => MicroBsdf::Diffuse { reflectance: scaled(reflectance)? },
+        })
     }
 }
 

@@ -364,6 +364,7 @@ unsafe extern "C" fn plane_sdf(user_data: *mut std::ffi::c_void, p: mf_vec3, out
 
 #[test]
 fn gpis_trace_equals_the_core_for_the_same_seed() {
+    use macrofacet::field::Constant;
     use macrofacet::gpis::{Plane, StartState, Trace};
     use macrofacet::params::gpis_from_params;
     use macrofacet::stats::Pcg32;
@@ -391,11 +392,11 @@ fn gpis_trace_equals_the_core_for_the_same_seed() {
         let origin = DVec3::new(0.0, 0.0, 3.0);
         let mut rng = Pcg32::new(seed, 0x6d66_6770_6973);
         // The FFI renormalises d with check_direction; hand the core the same vector.
-        let expected = core.trace(&mean, origin, check_direction("d", d).unwrap(), f64::INFINITY, &StartState::Uncorrelated, &mut || rng.next_f64());
+        let expected = core.trace(&mean, &Constant, origin, check_direction("d", d).unwrap(), f64::INFINITY, &StartState::Uncorrelated, &mut || rng.next_f64()).unwrap();
         let start = mf_gpis_start { kind: MF_GPIS_START_FREE, gradient: v(DVec3::ZERO) };
-        let mut hit = mf_gpis_hit { hit: false, t: f64::NAN, point: v(DVec3::ZERO), normal: v(DVec3::ZERO), gradient: v(DVec3::ZERO) };
+        let mut hit = mf_gpis_hit { hit: false, t: f64::NAN, point: v(DVec3::ZERO), normal: v(DVec3::ZERO), gradient: v(DVec3::ZERO), local: mf_local_params::NONE };
         let status = unsafe {
-            mf_gpis_trace(gpis, Some(plane_sdf), &mut calls as *mut usize as *mut _, v(origin), v(d), f64::INFINITY, &start, seed, &mut hit)
+            mf_gpis_trace(gpis, Some(plane_sdf), ptr::null(), &mut calls as *mut usize as *mut _, v(origin), v(d), f64::INFINITY, &start, seed, &mut hit)
         };
         assert_eq!(status, mf_status::MF_OK);
         match expected {

@@ -109,7 +109,7 @@ fn covariance_check(window: usize, points: usize) {
     let mut rng = Pcg32::new(11, window as u64);
     let n = 10_000;
     let samples: Vec<Vec<f64>> =
-        (0..n).map(|_| tracer.sample_along(origin, d, &ts, &StartState::Unconditioned, &mut || rng.next_f64())).collect();
+        (0..n).map(|_| tracer.sample_along(origin, d, &ts, &StartState::Unconditioned, &mut || rng.next_f64()).unwrap()).collect();
     let last = points - 1;
     let pairs = [(0, 0), (0, 1), (0, 2), (0, 3), (0, 5), (0, 8), (0, 12), (0, last), (5, 6), (5, 9), (10, 10), (10, 18), (12, 13), (12, 16), (19, 19), (last, 11), (3, 14), (7, 9), (last, last - 1), (last, last - 3), (2, last - 2), (last - 2, last - 2)];
     let mut worst: f64 = 0.0;
@@ -159,7 +159,7 @@ fn on_surface_starts_reproduce_the_conditional_law() {
     for (seed, (label, grad)) in [("renewal+", Some(g)), ("renewal", None)].into_iter().enumerate() {
         let mut rng = Pcg32::new(21 + seed as u64, 2);
         let start = StartState::OnSurface { gradient: grad };
-        let samples: Vec<Vec<f64>> = (0..n).map(|_| tracer.sample_along(xk, d, &ts, &start, &mut || rng.next_f64())).collect();
+        let samples: Vec<Vec<f64>> = (0..n).map(|_| tracer.sample_along(xk, d, &ts, &start, &mut || rng.next_f64()).unwrap()).collect();
         for (i, &t) in ts.iter().enumerate() {
             let x = xk + t * d;
             let r = x - xk;
@@ -192,7 +192,7 @@ fn transmittance_table(kernel: SeKernel, ndf: Ndf, n: usize, seed: u64, settings
     let f0 = 3.0;
     let distances: Vec<f64> = DEPTHS.iter().map(|h| (f0 - h) / -d.z).collect();
     let mut rng = Pcg32::new(seed, 5);
-    let est = transmittance_curve(&tracer, DVec3::new(0.0, 0.0, f0), d, &distances, n, &mut || rng.next_f64());
+    let est = transmittance_curve(&tracer, DVec3::new(0.0, 0.0, f0), d, &distances, n, &mut || rng.next_f64()).unwrap();
     assert_eq!(est.exhausted, 0);
     let m = medium(ndf);
     DEPTHS
@@ -264,7 +264,7 @@ fn smith_masking_upward() {
     let mut rng = Pcg32::new(31, 3);
     for h in [-0.5, 0.0, 0.5, 1.0] {
         let n = 10_000;
-        let est = transmittance_curve(&tracer, DVec3::new(0.0, 0.0, h), d, &[1e6], n, &mut || rng.next_f64());
+        let est = transmittance_curve(&tracer, DVec3::new(0.0, 0.0, h), d, &[1e6], n, &mut || rng.next_f64()).unwrap();
         let expected = m.transmittance(h, d, f64::INFINITY);
         let g1 = normal_cdf(h).powf(m.phase.ndf.lambda(d));
         let (t, se) = (est.transmittance[0], est.standard_error[0]);
@@ -314,7 +314,7 @@ fn vndf_case(label: &str, kernel: SeKernel, ndf: Ndf, theta: f64, n: usize, seed
     let d = downward(theta);
     let mut rng = Pcg32::new(seed, 9);
     let start = Instant::now();
-    let normals = visible_normals(&tracer, DVec3::new(0.0, 0.0, 3.0), d, n, &mut || rng.next_f64());
+    let normals = visible_normals(&tracer, DVec3::new(0.0, 0.0, 3.0), d, n, &mut || rng.next_f64()).unwrap();
     let secs = start.elapsed().as_secs_f64();
     assert_eq!(normals.len(), n, "{label}: every downward ray must hit the plane");
     for m in &normals {
@@ -363,7 +363,7 @@ fn vndf_metric_detects_a_wrong_roughness() {
         let tracer = GpisTracer::new(&plane, height_field_kernel());
         let d = downward(45.0);
         let mut rng = Pcg32::new(5, 9);
-        let normals = visible_normals(&tracer, DVec3::new(0.0, 0.0, 3.0), d, 3000, &mut || rng.next_f64());
+        let normals = visible_normals(&tracer, DVec3::new(0.0, 0.0, 3.0), d, 3000, &mut || rng.next_f64()).unwrap();
         let wrong = Beckmann::new(0.7, 0.7).unwrap();
         let (tv, floor, mse, _, _) = vndf_distance(&normals, |m| wrong.pdf_visible(-d, m));
         eprintln!("wrong roughness: TV {tv:.4} (floor {floor:.4}), MSE {mse:.3e}");
@@ -402,12 +402,12 @@ fn numerically_robust_on_degenerate_rays_and_kernels() {
             for start in [StartState::Uncorrelated, StartState::Unconditioned, StartState::OnSurface { gradient: None }, StartState::OnSurface { gradient: Some(DVec3::new(0.2, -0.1, 1.0)) }] {
                 for t_max in [1e-12, 0.5, 50.0, f64::INFINITY] {
                     let what = format!("kernel {ki}, d {d}, {start:?}, t_max {t_max}");
-                    check(tracer.trace(DVec3::new(0.0, 0.0, 0.5), d, t_max, &start, &mut u), &what);
+                    check(tracer.trace(DVec3::new(0.0, 0.0, 0.5), d, t_max, &start, &mut u).unwrap(), &what);
                 }
             }
         }
         let ts: Vec<f64> = (0..30).map(|i| 1e-12 * i as f64).collect();
-        let v = tracer.sample_along(DVec3::ZERO, DVec3::new(0.6, 0.0, 0.8), &ts, &StartState::OnSurface { gradient: Some(DVec3::Z) }, &mut u);
+        let v = tracer.sample_along(DVec3::ZERO, DVec3::new(0.6, 0.0, 0.8), &ts, &StartState::OnSurface { gradient: Some(DVec3::Z) }, &mut u).unwrap();
         assert!(v.iter().all(|x| x.is_finite()), "kernel {ki}: coincident points gave {v:?}");
     }
     // Sphere mean, rays from far away, and a Renewal walk that re-hits immediately.
@@ -415,7 +415,7 @@ fn numerically_robust_on_degenerate_rays_and_kernels() {
     let tracer = GpisTracer::new(&sphere, isotropic_kernel());
     for i in 0..50 {
         let o = DVec3::new(0.1 * i as f64, 0.0, 100.0);
-        check(tracer.trace(o, -DVec3::Z, f64::INFINITY, &StartState::Uncorrelated, &mut u), "sphere");
+        check(tracer.trace(o, -DVec3::Z, f64::INFINITY, &StartState::Uncorrelated, &mut u).unwrap(), "sphere");
     }
     // Cholesky of an exactly singular matrix (duplicate points) stays finite.
     let k = isotropic_kernel();
@@ -461,7 +461,7 @@ fn mirror_walks_conserve_energy() {
             let start = Instant::now();
             let (mut single, mut bounces_total) = (0usize, 0u64);
             for _ in 0..n {
-                match mirror_random_walk(&tracer, DVec3::new(0.0, 0.0, 3.0), wi, memory, 200, &mut || rng.next_f64()) {
+                match mirror_random_walk(&tracer, DVec3::new(0.0, 0.0, 3.0), wi, memory, 200, &mut || rng.next_f64()).unwrap() {
                     GpisWalk::Escaped { wo, bounces } => {
                         assert!(wo.z > 0.0 && wo.is_finite(), "{label} {memory:?}: escaped along {wo}");
                         if bounces == 1 {

@@ -40,7 +40,7 @@ struct MediumInteraction {
     /// The medium's own record of the event, opaque to the integrator, which hands the event
     /// back to the medium as the `from` of the next free flight (and to its phase function):
     /// the gpis medium keeps the crossing's exact point, normal and sampled gradient here.
-    std::array<double, 16> record{};
+    std::array<double, 24> record{};
 };
 
 class PhaseFunction {

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "library_abi.h"
+#include "medium_fields.h"
 #include "macrofacet.h"
 
 namespace mf {
@@ -169,8 +170,42 @@ LibraryField::LibraryField(const MediumParamBag& bag, bool gpss) : gpss_(gpss) {
         sigma_max = double(sigma_.field->range().hi[0]);
         if (variance_) sigma_max = std::sqrt(sigma_max);
     }
-    mf_field_callbacks cb{LibraryFieldCallbacks::at, LibraryFieldCallbacks::bounds, sigma_max};
-    if (mf_field_new_callbacks(&cb, &handle_) != MF_OK) throw Error(bag.loc, "mf_field_new_callbacks failed: " + mf_last_error());
+    callbacks_ = std::make_shared<mf_field_callbacks>(mf_field_callbacks{LibraryFieldCallbacks::at, LibraryFieldCallbacks::bounds, sigma_max});
+    if (mf_field_new_callbacks(callbacks_.get(), &handle_) != MF_OK) throw Error(bag.loc, "mf_field_new_callbacks failed: " + mf_last_error());
+}
+
+const mf_field_callbacks& LibraryField::callbacks() const { return *callbacks_; }
+
+MediumParamBag base_bag(const MediumParamBag& bag) {
+    if (!bag.fields) return bag;
+    MediumParamBag base = stand_in_bag(bag);
+    const Field* anisotropy = bag.fields->find("anisotropy");
+    const bool has_roughness = base.get("alpha") || base.get("alpha_u") || base.get("lengthscale") || base.get("lengthscale_x");
+    if (anisotropy && !has_roughness) {
+        const ParamValue* s = base.get("sigma");
+        const double sigma = s ? s->f : std::sqrt(base.get("variance") ? base.get("variance")->f : 0.0);
+        const double lambda_min = double(anisotropy->range().lo[Field::kEigenMin]);
+        ParamValue alpha;
+        alpha.kind = ParamValue::Kind::Float;
+        alpha.f = lambda_min > 0 ? kSqrt2 * sigma / std::sqrt(lambda_min) : 1.0;
+        alpha.loc = anisotropy->loc();
+        base.params.emplace_back("alpha", alpha);
+    }
+    return base;
+}
+
+void store_local(const mf_local_params& l, MediumInteraction* mi, int at) {
+    const double v[14] = {double(l.set), l.sigma, l.alpha.x, l.alpha.y, l.alpha.z, l.anisotropy[0], l.anisotropy[1],
+                          l.anisotropy[2], l.anisotropy[3], l.anisotropy[4], l.anisotropy[5], l.reflectance_scale.r,
+                          l.reflectance_scale.g, l.reflectance_scale.b};
+    std::copy(v, v + 14, mi->record.begin() + at);
+}
+
+const mf_local_params* load_local(const MediumInteraction& mi, int at, mf_local_params* out) {
+    const double* r = mi.record.data() + at;
+    if (r[0] == 0) return nullptr;
+    *out = mf_local_params{uint32_t(r[0]), r[1], mf_vec3{r[2], r[3], r[4]}, {r[5], r[6], r[7], r[8], r[9], r[10]}, mf_rgb{r[11], r[12], r[13]}};
+    return out;
 }
 
 LibraryField::~LibraryField() { mf_field_free(handle_); }

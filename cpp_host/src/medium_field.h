@@ -19,6 +19,8 @@
 #include "medium.h"
 
 struct mf_field;
+struct mf_field_callbacks;
+struct mf_local_params;
 
 namespace mf {
 
@@ -33,6 +35,8 @@ public:
     const ::mf_field* handle() const { return handle_; }
     /// The callbacks' user_data.
     void* user_data() const { return const_cast<LibraryField*>(this); }
+    /// The callbacks themselves (for a medium that must forward them with its own user_data).
+    const ::mf_field_callbacks& callbacks() const;
 
     /// One source of a scalar: a field or the bag's constant.
     struct Scalar {
@@ -43,6 +47,7 @@ public:
 
 private:
     friend struct LibraryFieldCallbacks;
+    std::shared_ptr<::mf_field_callbacks> callbacks_;
     ::mf_field* handle_ = nullptr;
     Scalar sigma_;
     bool variance_ = false;  // sigma_ holds the variance
@@ -54,5 +59,16 @@ private:
     std::array<double, 3> reflectance_base_{};
     bool roughness_varies_ = false;
 };
+
+/// The bag of the base medium (the library's constants): every varying parameter at its largest
+/// value (stand_in_bag), and for an anisotropy alone the largest roughness it reaches,
+/// sqrt(2) sigma_max / sqrt(lambda_min(Sigma)) (seeds/004 Eq. 25 with seeds/000 Eq. 4), as
+/// `alpha`. The bag itself when nothing varies.
+MediumParamBag base_bag(const MediumParamBag& bag);
+
+/// A collision's local parameters in an event record (MediumInteraction::record, 14 doubles from
+/// `at`), and back: null when the medium's own parameters hold there.
+void store_local(const ::mf_local_params& local, MediumInteraction* mi, int at);
+const ::mf_local_params* load_local(const MediumInteraction& mi, int at, ::mf_local_params* out);
 
 }  // namespace mf

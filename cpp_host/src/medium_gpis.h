@@ -19,6 +19,11 @@
 //    transmittance (a shadow ray starts its own realization, as a ray entering the band does).
 // Every call takes its seed from one dimension of the path's sampler, so renders stay
 // bit-identical per --seed whatever the thread count.
+//
+// Spatially varying parameters (issue 12): with a field (medium_field.h, the same one the
+// macrofacet medium reads) the kernel is the non-stationary one of seeds/004 Eqs. 25-26 with the
+// field's local parameters, the band widens to shell_extent times the field's largest sigma, and
+// each crossing carries the field's parameters to its reflection.
 #pragma once
 
 #include <memory>
@@ -27,15 +32,19 @@
 #include "medium.h"
 
 struct mf_gpis;
+struct mf_field;
 
 namespace mf {
 
+class LibraryField;
 class MeanSurface;
 
 class GpisMedium final : public Medium {
 public:
-    /// Takes ownership of `handle` (freed with mf_gpis_free in the destructor).
-    GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label);
+    /// Takes ownership of `handle` (freed with mf_gpis_free in the destructor). `field` (optional)
+    /// makes the parameters vary in space; throws mf::Error if the library refuses it.
+    GpisMedium(mf_gpis* handle, std::shared_ptr<const MeanSurface> mean, std::string label,
+               std::shared_ptr<const LibraryField> field = nullptr);
     ~GpisMedium() override;
     GpisMedium(const GpisMedium&) = delete;
     GpisMedium& operator=(const GpisMedium&) = delete;
@@ -56,14 +65,18 @@ public:
 private:
     mf_gpis* handle_;
     std::shared_ptr<const MeanSurface> mean_;
+    std::shared_ptr<const LibraryField> host_field_;
+    /// The library's view of host_field_ for traces: forwards to it (a trace's user_data is the
+    /// mean's and the field's, see medium_gpis.cpp).
+    mf_field* field_ = nullptr;
     std::shared_ptr<PhaseFunction> phase_;
     double envelope_ = 0;
     std::string label_;
 };
 
 /// The gpis hook: parameter bag -> mf_params -> mf_gpis_new (the same bag conversion and error
-/// locations as the macrofacet hook, medium_params.h). Throws mf::Error at the offending
-/// parameter's line.
+/// locations as the macrofacet hook, medium_params.h), with the bag's fields as in
+/// create_macrofacet_medium. Throws mf::Error at the offending parameter's line.
 std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> mean);
 
 }  // namespace mf

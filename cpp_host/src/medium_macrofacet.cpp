@@ -17,22 +17,6 @@ namespace {
 
 mf_frame frame_of(const MediumInteraction& mi) { return mf_frame{to_mf(mi.frame_n), to_mf(mi.frame_t)}; }
 
-/// The collision's local parameters in the event record (issue 12): set, sigma, alpha (3),
-/// anisotropy (6), reflectance scale (3).
-void store_local(const mf_local_params& l, MediumInteraction* mi) {
-    auto& r = mi->record;
-    r = {double(l.set), l.sigma, l.alpha.x, l.alpha.y, l.alpha.z, l.anisotropy[0], l.anisotropy[1], l.anisotropy[2],
-         l.anisotropy[3], l.anisotropy[4], l.anisotropy[5], l.reflectance_scale.r, l.reflectance_scale.g, l.reflectance_scale.b, 0, 0};
-}
-
-/// The local parameters of an event, or null when the medium's own hold there.
-const mf_local_params* load_local(const MediumInteraction& mi, mf_local_params* out) {
-    const auto& r = mi.record;
-    if (r[0] == 0) return nullptr;
-    *out = mf_local_params{uint32_t(r[0]), r[1], mf_vec3{r[2], r[3], r[4]}, {r[5], r[6], r[7], r[8], r[9], r[10]}, mf_rgb{r[11], r[12], r[13]}};
-    return out;
-}
-
 /// The library's phase function (seeds/000 Eq. 11 with the flakes' reflectance) in the frame the
 /// tracker returned with the collision. Host convention: `wo` points back along the incoming ray,
 /// `wi` is the new direction; the library's `wi` is our `wo` and its `wo` our `wi`.
@@ -53,7 +37,7 @@ public:
         mf_frame fr = frame_of(mi);
         mf_phase_value v;
         mf_local_params local;
-        check(mf_phase_eval_pdf_local(h_, load_local(mi, &local), &fr, to_mf_unit(wo), to_mf_unit(wi), &v), "mf_phase_eval_pdf");
+        check(mf_phase_eval_pdf_local(h_, load_local(mi, 0, &local), &fr, to_mf_unit(wo), to_mf_unit(wi), &v), "mf_phase_eval_pdf");
         *pdf = float(v.pdf);
         return Rgb(float(v.value.r), float(v.value.g), float(v.value.b));
     }
@@ -64,7 +48,7 @@ public:
         mf_frame fr = frame_of(mi);
         mf_phase_sample_result s;
         mf_local_params local;
-        check(mf_phase_sample_local(h_, load_local(mi, &local), &fr, to_mf_unit(wo), u, &s), "mf_phase_sample");
+        check(mf_phase_sample_local(h_, load_local(mi, 0, &local), &fr, to_mf_unit(wo), u, &s), "mf_phase_sample");
         if (!s.valid || !(s.pdf > 0)) return false;
         *wi = from_mf(s.wo);
         *pdf = float(s.pdf);
@@ -144,7 +128,7 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const Med
     mi->frame_n = from_mf(c.frame.normal);
     mi->frame_t = from_mf(c.frame.tangent);
     mi->sdf_f = float(c.f);
-    store_local(c.local, mi);
+    store_local(c.local, mi, 0);
     mi->medium = this;
     return true;
 }
@@ -174,21 +158,7 @@ std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag&
     if (bag.type != "macrofacet") throw Error(bag.loc, "not a macrofacet medium");
     // Spatially varying parameters: the base medium takes each at its largest value (its sigma
     // is then the region's), the field gives the local ones (medium_field.h).
-    MediumParamBag base = bag.fields ? stand_in_bag(bag) : bag;
-    // An anisotropy alone gives no scalar roughness: the base takes the largest one it reaches,
-    // sqrt(2) sigma_max / sqrt(lambda_min(Sigma)) (seeds/004 Eq. 25 with seeds/000 Eq. 4).
-    const Field* anisotropy = bag.fields ? bag.fields->find("anisotropy") : nullptr;
-    const bool has_roughness = base.get("alpha") || base.get("alpha_u") || base.get("lengthscale") || base.get("lengthscale_x");
-    if (anisotropy && !has_roughness) {
-        const ParamValue* s = base.get("sigma");
-        const double sigma = s ? s->f : std::sqrt(base.get("variance") ? base.get("variance")->f : 0.0);
-        const double lambda_min = double(anisotropy->range().lo[Field::kEigenMin]);
-        ParamValue alpha;
-        alpha.kind = ParamValue::Kind::Float;
-        alpha.f = lambda_min > 0 ? std::sqrt(2.0) * sigma / std::sqrt(lambda_min) : 1.0;
-        alpha.loc = anisotropy->loc();
-        base.params.emplace_back("alpha", alpha);
-    }
+    const MediumParamBag base = base_bag(bag);
     ParamsHandle params = bag_to_params(base);
     mf_medium* handle = nullptr;
     if (mf_medium_new(params.get(), &handle) != MF_OK) throw medium_param_error(base, mf_last_error());

@@ -545,15 +545,6 @@ private:
                                                           "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
             if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium cannot be an emitter");
             shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
-            if (kind == "gpis" && mf_bag[0]->fields) {
-                // Validated here; rendered once the gpis ground truth takes the fields.
-                if (!opts_.validate_only) refuse_varying_fields(*mf_bag[0]);
-                auto surface = MeanSurface::of(*shape);
-                auto g = create_gpis_medium(stand_in_bag(*mf_bag[0]), surface);
-                scene_->media.push_back(g);
-                scene_->add_shape(make_region_boundary(shape, *surface, g->envelope(), g));
-                return;
-            }
             auto surface = MeanSurface::of(*shape);
             if (kind == "gpis") {
                 auto g = create_gpis_medium(*mf_bag[0], surface);

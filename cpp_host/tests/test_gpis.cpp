@@ -14,13 +14,20 @@
 //    (grazing the mean surface) sometimes (0 < mean T < 1, N = 2000).
 //  * determinism_gpis: a floor, an area light, a gold gpis sphere: bit-identical EXR for the same
 //    seed with 1 and 2 threads; a different seed gives a different image.
+//  * gpis_fields_from_the_scene: a sigma grid of one value renders bit for bit as that scalar;
+//    a sigma stepping across x = 0 widens the band to 6 sigma_max and renders.
+#include <cstring>
 #include <vector>
 
 #include "check.h"
 #include "integrator.h"
+#include "mean_surface.h"
 #include "medium_gpis.h"
 #include "scene_builder.h"
 #include "scene_util.h"
+#include "shape.h"
+#include "volume_io.h"
+#include "xml_scene.h"
 
 using namespace mf;
 
@@ -42,6 +49,15 @@ static void furnace(const std::string& name, const std::string& params, const st
     CHECK_MSG(sa.mean[2] < 0.9, name + ": a gold gpis is not visible (blue mean " + std::to_string(sa.mean[2]) + ")");
     std::printf("  %-22s mean %.5f %.5f %.5f  se %.5f  max |dev| %.4f   (gold: blue mean %.3f)\n", name.c_str(), s.mean[0],
                 s.mean[1], s.mean[2], s.se[0], s.maxdev, sa.mean[2]);
+}
+
+/// An nx x 1 x 1 one-channel .vol grid over the unit cube.
+static void write_vol(const std::string& path, int nx, const std::vector<float>& values) {
+    VolumeGridData g;
+    g.nx = nx, g.ny = 1, g.nz = 1, g.channels = 1;
+    g.values = values;
+    g.bbox.hi = Vec3(1.0f);
+    write_vol_file(path, g);
 }
 
 static const char* kSphere = "<shape type=\"sphere\"><float name=\"radius\" value=\"0.7\"/>";
@@ -115,6 +131,40 @@ TEST_CASE(determinism_gpis) {
     CHECK(fa == read_file(b));
     CHECK(fa == read_file(c));
     CHECK(fa != read_file(d));
+}
+
+TEST_CASE(gpis_fields_from_the_scene) {
+    // Issue 12: a gpis medium takes the same <volume> parameters as a macrofacet one. A grid of
+    // one value renders exactly as that scalar (same seed); a sigma that steps across x = 0 (0.02
+    // / 0.03) widens the band to 6 sigma_max and still renders a visible gold sphere.
+    const std::string flat_vol = work("gpis_sigma_flat.vol"), step_vol = work("gpis_sigma_step.vol");
+    write_vol(flat_vol, 2, {0.02f, 0.02f});
+    write_vol(step_vol, 2, {0.02f, 0.03f});
+    auto grid = [](const std::string& file) {
+        return "<volume name=\"sigma\" type=\"gridvolume\"><string name=\"filename\" value=\"" + file +
+               "\"/><string name=\"filter_type\" value=\"nearest\"/><transform name=\"to_world\"><scale value=\"2\"/>"
+               "<translate x=\"-1\" y=\"-1\" z=\"-1\"/></transform></volume>";
+    };
+    const std::string rest = R"(<string name="distribution" value="gpss"/><float name="alpha" value="0.5"/>)";
+    // (the grid holds float32: the scalar is that float's exact value)
+    Image scalar = render("gpis_field_scalar", env_scene(gpis_object("gpis", "<float name=\"sigma\" value=\"0.0199999995529651641845703125\"/>" + rest, "Au"), 4));
+    Image flat = render("gpis_field_flat", env_scene(gpis_object("gpis", grid(flat_vol) + rest, "Au"), 4));
+    CHECK(scalar.rgb == flat.rgb);  // bit for bit
+    Image step = render("gpis_field_step", env_scene(gpis_object("gpis", grid(step_vol) + rest, "Au"), 4));
+    Stats s = stats(step, 1.0);
+    CHECK_MSG(s.mean[2] < 0.9, "a gold gpis with a varying sigma is not visible");
+    CHECK(step.rgb != scalar.rgb);
+    ParsedScene parsed = parse_scene_string(env_scene(gpis_object("gpis", grid(step_vol) + rest, "Au"), 1), work("gpis_field.xml"), {});
+    BuildReport report;
+    auto scene = build_scene(parsed, BuildOptions(), &report);
+    CHECK(report.macrofacet.size() == 1 && report.macrofacet[0].bag->fields);
+    bool found = false;
+    for (const auto& m : scene->media)
+        if (auto* g = dynamic_cast<const GpisMedium*>(m.get())) {
+            CHECK_NEAR(g->envelope(), 6 * 0.03, 1e-6);
+            found = true;
+        }
+    CHECK(found);
 }
 
 TEST_MAIN()

@@ -132,7 +132,7 @@ pub fn run(ctx: &Ctx) -> Section {
                     SEED + 100 * c as u64 + a as u64
                 };
                 let mut rng = Pcg32::new(seed, k);
-                let v = visible_normals(&tracer, DVec3::new(0.0, 0.0, 3.0), d, n / chunks, &mut || rng.next_f64());
+                let v = visible_normals(&tracer, DVec3::new(0.0, 0.0, 3.0), d, n / chunks, &mut || rng.next_f64()).expect("a stationary GPIS has no field to fail");
                 if kind == Kind::Fine {
                     Out::Fine(v)
                 } else {

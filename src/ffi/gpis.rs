@@ -8,15 +8,24 @@
 //! supplied by a callback. Kernel axes are world axes (use an isotropic kernel on curved
 //! shapes). The random numbers of a trace come from a generator the call seeds with the host's
 //! 64-bit `seed` (a trace needs an unbounded count of them); same seed, same realization.
+//!
+//! Spatially varying parameters come from an `mf_field` (NULL: stationary), the same fields the
+//! tracking calls take: the kernel becomes the non-stationary kernel of seeds/004 Eqs. 25–26
+//! whose local `σ(x)` and `Σ(x)` the field gives (roughness form `l_i = √2 σ(x)/α_i(x)` along
+//! the world axes, or the anisotropy `Σ(x)` as is; see `src/gpis/nonstationary.rs`). A crossing
+//! reports the field's parameters there for [`mf_gpis_scatter`].
 
+use super::field::{mf_field, mf_local_params, CallbackField};
 use super::medium::{mf_phase_sample_result, mf_rgb, mf_vec3};
+use super::track::field_arg;
 use super::{arg, boundary, free_handle, into_handle, mf_params, mf_status, out, FfiError};
 use crate::error::{Error, ErrorKind};
+use crate::field::{Constant, LocalParams};
 use crate::frame::check_direction;
 use crate::gpis::{GpisSurface, MeanSdf, StartState, Trace};
 use crate::params::gpis_from_params;
 use crate::stats::Pcg32;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use std::cell::Cell;
 use std::ffi::c_void;
 
@@ -33,6 +42,10 @@ pub const MF_GPIS_START_ON_SURFACE: u32 = 1;
 pub struct mf_sdf_sample {
     pub f: f64,
     pub gradient: mf_vec3,
+    /// Texture coordinates of the mean surface's closest point (for fields painted over it; the
+    /// library sets 0 before the call, a host may leave them).
+    pub u: f64,
+    pub v: f64,
 }
 
 /// The host's mean signed distance: writes `f(p)` and `∇f(p)` (world space) to `out`. Must not
@@ -51,7 +64,8 @@ pub struct mf_gpis_start {
 /// The first entering crossing of a realization: `hit` false when the ray leaves the band of the
 /// mean surface or reaches `t_max` first (the other fields are then zero). `normal` is outward
 /// (`normal . d < 0`); `gradient` is the sampled, unnormalised gradient to pass on to the next
-/// segment's [`mf_gpis_start`].
+/// segment's [`mf_gpis_start`]; `local` the field's parameters at the crossing (`set = 0`
+/// without a field), for [`mf_gpis_scatter`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct mf_gpis_hit {
@@ -60,6 +74,7 @@ pub struct mf_gpis_hit {
     pub point: mf_vec3,
     pub normal: mf_vec3,
     pub gradient: mf_vec3,
+    pub local: mf_local_params,
 }
 
 /// An immutable GPIS configuration; safe to share between threads.
@@ -75,16 +90,16 @@ struct CallbackMean {
 }
 
 impl CallbackMean {
-    fn eval(&self, p: DVec3) -> (f64, DVec3) {
-        let mut s = mf_sdf_sample { f: f64::NAN, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 } };
+    fn eval(&self, p: DVec3) -> (f64, DVec3, DVec2) {
+        let mut s = mf_sdf_sample { f: f64::NAN, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 };
         // SAFETY: the host promised a callable function; it writes one mf_sdf_sample.
         unsafe { (self.sdf)(self.user_data, p.into(), &mut s) };
-        let g = DVec3::from(s.gradient);
-        if s.f.is_finite() && g.is_finite() {
-            (s.f, g)
+        let (g, uv) = (DVec3::from(s.gradient), DVec2::new(s.u, s.v));
+        if s.f.is_finite() && g.is_finite() && uv.is_finite() {
+            (s.f, g, uv)
         } else {
             self.failed.set(true);
-            (f64::MAX, DVec3::Z) // far outside: ends the march; the call then reports the failure
+            (f64::MAX, DVec3::Z, DVec2::ZERO) // far outside: ends the march; the call then reports the failure
         }
     }
 }
@@ -95,6 +110,9 @@ impl MeanSdf for CallbackMean {
     }
     fn gradient(&self, p: DVec3) -> DVec3 {
         self.eval(p).1
+    }
+    fn uv(&self, p: DVec3) -> DVec2 {
+        self.eval(p).2
     }
 }
 
@@ -130,29 +148,39 @@ pub unsafe extern "C" fn mf_gpis_free(gpis: *mut mf_gpis) {
 }
 
 /// The half-width of the band around the mean surface where realizations are sampled
-/// (`shell_extent * sigma`, scene units): rays may start at `f = envelope` with
-/// `MF_GPIS_START_FREE`.
+/// (`shell_extent * sigma`, scene units; with a `field`, `shell_extent * sigma_max` of the
+/// field, NULL: stationary): rays may start at `f = envelope` with `MF_GPIS_START_FREE`.
 ///
 /// # Safety
 /// Pointers must be NULL or valid.
 #[no_mangle]
-pub unsafe extern "C" fn mf_gpis_envelope(gpis: *const mf_gpis, out_envelope: *mut f64) -> mf_status {
+pub unsafe extern "C" fn mf_gpis_envelope(gpis: *const mf_gpis, field: *const mf_field, out_envelope: *mut f64) -> mf_status {
     boundary(|| {
         let g = arg(gpis, "gpis")?;
-        *out(out_envelope, "out_envelope")? = g.inner.envelope();
+        let envelope = match field_arg(field) {
+            None => g.inner.envelope(&Constant),
+            Some(f) => g.inner.envelope(&CallbackField::new(f, std::ptr::null_mut())),
+        };
+        *out(out_envelope, "out_envelope")? = envelope;
         Ok(())
     })
 }
 
 /// Realizes the GPIS along `origin + t d`, `0 < t <= t_max` (+inf allowed), and returns its first
-/// entering crossing. `sdf(user_data, p, out)` supplies the mean; `seed` the random stream.
+/// entering crossing. `sdf(user_data, p, out)` supplies the mean; `field` (NULL for a stationary
+/// GPIS) the kernel's local parameters, its callbacks called with the same `user_data`; `seed`
+/// the random stream. Errors: invalid arguments, a NaN/infinite mean, a field callback's
+/// failure (`MF_ERROR_CALLBACK`) or invalid parameters (a `sigma` above the field's
+/// `sigma_max`, a non-positive-definite anisotropy, ...) — nothing is written then.
 ///
 /// # Safety
-/// Pointers must be NULL or valid; `sdf` must be safe to call with `user_data` from this thread.
+/// Pointers must be NULL or valid; `sdf` and the field's callbacks must be safe to call with
+/// `user_data` from this thread.
 #[no_mangle]
 pub unsafe extern "C" fn mf_gpis_trace(
     gpis: *const mf_gpis,
     sdf: mf_sdf_fn,
+    field: *const mf_field,
     user_data: *mut c_void,
     origin: mf_vec3,
     d: mf_vec3,
@@ -187,28 +215,35 @@ pub unsafe extern "C" fn mf_gpis_trace(
         let slot = out(out_hit, "out_hit")?;
         let mean = CallbackMean { sdf, user_data, failed: Cell::new(false) };
         let mut rng = Pcg32::new(seed, 0x6d66_6770_6973); // "mfgpis"
-        let trace = g.inner.trace(&mean, origin, d, t_max, &state, &mut || rng.next_f64());
+        let uniform = &mut || rng.next_f64();
+        let trace = match field_arg(field) {
+            None => g.inner.trace(&mean, &Constant, origin, d, t_max, &state, uniform),
+            Some(f) => g.inner.trace(&mean, &CallbackField::new(f, user_data), origin, d, t_max, &state, uniform),
+        };
+        // A failed mean may also have misled the field: it is the first cause.
         if mean.failed.get() {
             return Err(invalid("the sdf callback returned a NaN or infinite value".into()));
         }
         let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-        *slot = match trace {
-            Trace::Hit(c) => mf_gpis_hit { hit: true, t: c.t, point: c.point.into(), normal: c.normal.into(), gradient: c.gradient.into() },
-            Trace::Miss | Trace::Exhausted { .. } => mf_gpis_hit { hit: false, t: 0.0, point: zero, normal: zero, gradient: zero },
+        *slot = match trace? {
+            Trace::Hit(c) => mf_gpis_hit { hit: true, t: c.t, point: c.point.into(), normal: c.normal.into(), gradient: c.gradient.into(), local: (&c.local).into() },
+            Trace::Miss | Trace::Exhausted { .. } => mf_gpis_hit { hit: false, t: 0.0, point: zero, normal: zero, gradient: zero, local: mf_local_params::NONE },
         };
         Ok(())
     })
 }
 
-/// Specular reflection at a crossing: `wi` (pointing away, `wi = -d`) about the unit `normal`.
-/// The result's `pdf` is 0: the reflection is a delta, so it takes no part in MIS. `valid` is
-/// false when `wi` lies behind the normal.
+/// Specular reflection at a crossing: `wi` (pointing away, `wi = -d`) about the unit `normal`,
+/// with the field's parameters there (`*local`, as the hit reported them; NULL: the GPIS's own):
+/// their `reflectance_scale` scales the reflectance. The result's `pdf` is 0: the reflection is
+/// a delta, so it takes no part in MIS. `valid` is false when `wi` lies behind the normal.
 ///
 /// # Safety
 /// Pointers must be NULL or valid.
 #[no_mangle]
 pub unsafe extern "C" fn mf_gpis_scatter(
     gpis: *const mf_gpis,
+    local: *const mf_local_params,
     wi: mf_vec3,
     normal: mf_vec3,
     out_sample: *mut mf_phase_sample_result,
@@ -217,9 +252,15 @@ pub unsafe extern "C" fn mf_gpis_scatter(
         let g = arg(gpis, "gpis")?;
         let wi = check_direction("wi", wi.into())?;
         let n = check_direction("normal", normal.into())?;
+        // SAFETY: NULL or a valid mf_local_params, as the caller promises.
+        let local = match unsafe { local.as_ref() } {
+            None => LocalParams::default(),
+            Some(l) => LocalParams::try_from(l)?,
+        };
+        let reflected = g.inner.reflect(&local, wi, n)?;
         let slot = out(out_sample, "out_sample")?;
         let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-        *slot = match g.inner.reflect(wi, n) {
+        *slot = match reflected {
             Some((wo, w)) => mf_phase_sample_result { wo: wo.into(), weight: mf_rgb { r: w[0], g: w[1], b: w[2] }, pdf: 0.0, valid: true },
             None => mf_phase_sample_result { wo: zero, weight: mf_rgb { r: 0.0, g: 0.0, b: 0.0 }, pdf: 0.0, valid: false },
         };

@@ -164,7 +164,7 @@ impl Call<'_> {
 }
 
 /// The optional field argument.
-fn field_arg<'a>(field: *const mf_field) -> Option<&'a mf_field> {
+pub(super) fn field_arg<'a>(field: *const mf_field) -> Option<&'a mf_field> {
     // SAFETY: NULL or a live handle, as the caller promises.
     unsafe { field.as_ref() }
 }

@@ -19,7 +19,34 @@
 //! `l_z = +∞` makes the GPIS of a plane a height field.
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::field::LocalParams;
 use glam::DVec3;
+
+/// What the march in function space needs from a covariance: the stationary [`SeKernel`], or
+/// the non-stationary kernel of a field ([`super::FieldKernel`]), whose covariances depend on
+/// data at each point (its [`Covariance::Local`]), computed once per observation.
+pub trait Covariance {
+    /// The kernel's data at one point (nothing for a stationary kernel).
+    type Local: Copy;
+    /// The data at `p`; with `derivatives`, also what covariances of partial derivatives at `p`
+    /// need.
+    fn local(&self, p: DVec3, derivatives: bool) -> Result<Self::Local>;
+    /// `cov(a, b)`; `la`, `lb` are the data at their points.
+    fn covariance(&self, a: &Functional, la: &Self::Local, b: &Functional, lb: &Self::Local) -> f64;
+    /// `cov(a, a)`.
+    fn variance(&self, a: &Functional, la: &Self::Local) -> f64;
+    /// The process's standard deviation at the point.
+    fn sigma(&self, la: &Self::Local) -> f64;
+    /// The largest standard deviation anywhere (the scale of the envelope).
+    fn region_sigma(&self) -> f64;
+    /// The step `Δt` from the point along `d` whose correlation is `rho` there (`+∞` when the
+    /// process is perfectly correlated along `d`).
+    fn step_for_correlation(&self, la: &Self::Local, d: DVec3, rho: f64) -> f64;
+    /// False when `∂_i f` is deterministic at the point (`∂_i μ`; not conditioned on).
+    fn random_partial(&self, la: &Self::Local, i: usize) -> bool;
+    /// The field's parameters at the point (none for a stationary kernel).
+    fn params(&self, la: &Self::Local) -> LocalParams;
+}
 
 /// The squared-exponential kernel: variance `sigma²`, correlation lengths `lengthscale` along
 /// the local axes (`+∞` allowed per axis).
@@ -135,5 +162,34 @@ impl SeKernel {
                 k * (delta - w[i] * w[j] * r[i] * r[j])
             }
         }
+    }
+}
+
+impl Covariance for SeKernel {
+    type Local = ();
+
+    fn local(&self, _: DVec3, _: bool) -> Result<()> {
+        Ok(())
+    }
+    fn covariance(&self, a: &Functional, _: &(), b: &Functional, _: &()) -> f64 {
+        SeKernel::covariance(self, a, b)
+    }
+    fn variance(&self, a: &Functional, _: &()) -> f64 {
+        SeKernel::variance(self, a)
+    }
+    fn sigma(&self, _: &()) -> f64 {
+        self.sigma
+    }
+    fn region_sigma(&self) -> f64 {
+        self.sigma
+    }
+    fn step_for_correlation(&self, _: &(), d: DVec3, rho: f64) -> f64 {
+        SeKernel::step_for_correlation(self, d, rho)
+    }
+    fn random_partial(&self, _: &(), i: usize) -> bool {
+        self.inverse_squared_lengths()[i] > 0.0
+    }
+    fn params(&self, _: &()) -> LocalParams {
+        LocalParams::default()
     }
 }

@@ -1,6 +1,6 @@
 //! Mean functions of the GPIS: signed-distance functions (`f > 0` outside / above).
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 /// The mean `μ` of the Gaussian process: a signed distance function of the mean surface
 /// (crate convention: `f > 0` outside / above, local frame normal = `+z`). `gradient` must be
@@ -11,6 +11,11 @@ pub trait MeanSdf {
     fn value(&self, p: DVec3) -> f64;
     /// `∇μ(p)`.
     fn gradient(&self, p: DVec3) -> DVec3;
+    /// Texture coordinates of the mean surface's point closest to `p`, for fields painted over
+    /// the surface (none: zero).
+    fn uv(&self, _p: DVec3) -> DVec2 {
+        DVec2::ZERO
+    }
 }
 
 /// The plane `μ(p) = p.z − height`, gradient `+z`: the planar GPIS of seeds/000 Fig. 7 / 10.

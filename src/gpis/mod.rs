@@ -11,6 +11,13 @@
 //! `α_i = √2 σ / l_i`. Each realization's zero level set is one surface; its normals are
 //! `∇f/|∇f|` (seeds/004 Sec. 3.2), pointing outward.
 //!
+//! With a field ([`GpisTracer::with_field`], the [`MediumField`] the macrofacet tracker takes)
+//! the kernel is the non-stationary kernel of seeds/004 Eqs. 25–26 whose local `σ(x)` and
+//! anisotropy `Σ(x)` the field gives ([`FieldKernel`], which says how `sigma`, `alpha` and
+//! `anisotropy` map to it). The march is the same; its steps follow the local kernel, the
+//! envelope is drawn at the field's `sigma_max`, and each observation keeps its point's local
+//! kernel ([`Covariance::Local`]).
+//!
 //! ## Ray marching in function space (seeds/004 Sec. 4.2, Algorithm 1, Fig. 8)
 //! [`GpisTracer::trace`] follows the ray `x(t) = o + t d` (`d` = *propagation* direction, unit):
 //! 1. **Envelope.** While the mean is above the envelope `μ > E σ` (`E` =
@@ -88,6 +95,21 @@
 //!   normals by about −0.004 in the mean normal (3–4 standard errors against a brute-force
 //!   sampler in the validation report): it misses crossings where a realization just grazes the
 //!   ray between samples. Use `step_correlation = 0.99` for grazing normals.
+//!
+//! ## With fields (`tests/gpis_fields.rs`)
+//! - Gram matrices of values and gradients on random point sets (smooth anisotropy, smooth
+//!   roughness, stepped σ and α, height fields) have no eigenvalue below −3e-17 × the largest;
+//!   the kernel without Eq. 25's prefactor gives −6e-2. Derivative covariances match finite
+//!   differences of the kernel to 5e-8. Realizations' covariance across a step and a ramp
+//!   matches the kernel within 2.4 SE (300 pairs).
+//! - A field of the medium's own (or of constant) parameters gives the stationary crossings bit
+//!   for bit; so does a piecewise-constant field for rays that stay in one region.
+//! - Planar GPSS, σ 0.5 | 1 across `x = 0` at fixed `α = 1`, 45°: per region and across a ramp
+//!   11 lengthscales wide, realizations vs the macrofacet tracker with the same field differ as
+//!   in the stationary case (≤ 0.015 down to the mean plane). Across a sharp step the
+//!   realizations jump (Eq. 25's `σ(x)σ(y)`): going up the step their transmittance falls 0.16
+//!   below the tracker's just past it (z ≈ −45), going down it rises up to 0.045 above (z ≈ +11)
+//!   — cliffs that the local-stationary medium `ρ(f; σ(x))` does not represent.
 
 mod experiments;
 mod kernel;
@@ -95,11 +117,15 @@ pub mod linalg;
 mod surface;
 pub use surface::GpisSurface;
 mod mean;
+mod nonstationary;
 
 pub use experiments::{mirror_random_walk, transmittance_curve, visible_normals, GpisWalk, TransmittanceEstimate};
-pub use kernel::{Functional, SeKernel};
+pub use kernel::{Covariance, Functional, SeKernel};
 pub use mean::{MeanSdf, Plane, Sphere};
+pub use nonstationary::{sigma_max, FieldKernel, LocalKernel};
 
+use crate::error::{Error, ErrorKind, Result};
+use crate::field::{Constant, LocalParams, MediumField};
 use crate::special::{ln_normal_cdf, probit, probit_of_ln};
 use glam::DVec3;
 
@@ -153,6 +179,9 @@ pub struct Crossing {
     pub gradient: DVec3,
     /// `gradient/|gradient|`, outward; `normal · d < 0`.
     pub normal: DVec3,
+    /// The field's parameters at the crossing (none without a field): what the reflection there
+    /// uses (`reflectance_scale`).
+    pub local: LocalParams,
 }
 
 /// The result of [`GpisTracer::trace`].
@@ -210,13 +239,20 @@ impl Default for MarchSettings {
     }
 }
 
-/// A GPIS `GP(μ, k)` and the settings to march rays through its realizations.
+/// A GPIS `GP(μ, k)` and the settings to march rays through its realizations. The kernel is the
+/// stationary `kernel`, or, with a field ([`GpisTracer::with_field`]), the non-stationary kernel
+/// of seeds/004 Eqs. 25–26 whose local parameters the field gives, `kernel` supplying what the
+/// field leaves unset ([`FieldKernel`]).
 #[derive(Clone, Copy, Debug)]
-pub struct GpisTracer<'a, M: MeanSdf> {
+pub struct GpisTracer<'a, M: MeanSdf, F: MediumField = Constant> {
     pub mean: &'a M,
     pub kernel: SeKernel,
+    pub field: &'a F,
     pub settings: MarchSettings,
 }
+
+/// The field of a stationary GPIS.
+const CONSTANT: Constant = Constant;
 
 /// A standard normal from one uniform number in `[0, 1)` (probit; `u = 0` is nudged inward).
 pub fn standard_normal(uniform: &mut impl FnMut() -> f64) -> f64 {
@@ -229,8 +265,9 @@ pub fn standard_normal(uniform: &mut impl FnMut() -> f64) -> f64 {
 /// then bisection samples — with an incrementally maintained Cholesky factor `L` of their Gram
 /// matrix (plus the relative nugget) and `α = L⁻¹ r`, `r` = residuals `observed − prior mean`.
 /// Appending a sample costs `O(n²)`; forgetting the oldest half of the window refactors once.
-struct Conditioning<'t, M: MeanSdf> {
-    kernel: SeKernel,
+/// Each observation keeps the kernel's data at its point.
+struct Conditioning<'t, M: MeanSdf, K: Covariance> {
+    kernel: &'t K,
     mean: &'t M,
     /// Requested relative nugget.
     jitter: f64,
@@ -238,12 +275,12 @@ struct Conditioning<'t, M: MeanSdf> {
     eps: f64,
     window_cap: usize,
     memory_len: usize,
-    obs: Vec<(Functional, f64)>,
+    obs: Vec<(Functional, f64, K::Local)>,
     l: Vec<Vec<f64>>,
     alpha: Vec<f64>,
 }
 
-impl<'t, M: MeanSdf> Conditioning<'t, M> {
+impl<'t, M: MeanSdf, K: Covariance> Conditioning<'t, M, K> {
     fn prior_mean(&self, a: &Functional) -> f64 {
         match *a {
             Functional::Value(p) => self.mean.value(p),
@@ -252,18 +289,19 @@ impl<'t, M: MeanSdf> Conditioning<'t, M> {
     }
 
     /// Variance of a functional plus its nugget (the diagonal entry of the factored matrix).
-    fn jittered_variance(&self, a: &Functional) -> f64 {
-        let v = self.kernel.variance(a);
+    fn jittered_variance(&self, a: &Functional, la: &K::Local) -> f64 {
+        let v = self.kernel.variance(a, la);
         if v > 0.0 {
             v * (1.0 + self.eps)
         } else {
-            self.eps * self.kernel.sigma * self.kernel.sigma
+            let sigma = self.kernel.sigma(la);
+            self.eps * sigma * sigma
         }
     }
 
     /// `v = L⁻¹ k(obs, a)`.
-    fn solve_k(&self, a: &Functional) -> Vec<f64> {
-        let mut v: Vec<f64> = self.obs.iter().map(|o| self.kernel.covariance(&o.0, a)).collect();
+    fn solve_k(&self, a: &Functional, la: &K::Local) -> Vec<f64> {
+        let mut v: Vec<f64> = self.obs.iter().map(|o| self.kernel.covariance(&o.0, &o.2, a, la)).collect();
         for i in 0..v.len() {
             let row = &self.l[i];
             let s = v[i] - row[..i].iter().zip(&v[..i]).map(|(x, y)| x * y).sum::<f64>();
@@ -277,7 +315,7 @@ impl<'t, M: MeanSdf> Conditioning<'t, M> {
         let mut k = vec![0.0; n * n];
         for i in 0..n {
             for j in 0..=i {
-                let c = self.kernel.covariance(&self.obs[i].0, &self.obs[j].0);
+                let c = self.kernel.covariance(&self.obs[i].0, &self.obs[i].2, &self.obs[j].0, &self.obs[j].2);
                 k[i * n + j] = c;
                 k[j * n + i] = c;
             }
@@ -289,12 +327,13 @@ impl<'t, M: MeanSdf> Conditioning<'t, M> {
         self.l = (0..n).map(|i| chol.l[i * n..i * n + i + 1].to_vec()).collect();
     }
 
-    /// Adds the observation `a = observed`; `v` is `L⁻¹ k(obs, a)` if already computed.
-    fn append(&mut self, a: Functional, observed: f64, v: Option<Vec<f64>>) {
+    /// Adds the observation `a = observed` (kernel data `la`); `v` is `L⁻¹ k(obs, a)` if already
+    /// computed.
+    fn append(&mut self, a: Functional, la: K::Local, observed: f64, v: Option<Vec<f64>>) {
         let r = observed - self.prior_mean(&a);
-        let v = v.unwrap_or_else(|| self.solve_k(&a));
-        let d = self.jittered_variance(&a) - v.iter().map(|x| x * x).sum::<f64>();
-        self.obs.push((a, r));
+        let v = v.unwrap_or_else(|| self.solve_k(&a, &la));
+        let d = self.jittered_variance(&a, &la) - v.iter().map(|x| x * x).sum::<f64>();
+        self.obs.push((a, r, la));
         if d > 0.0 && d.is_finite() && r.is_finite() {
             let ld = d.sqrt();
             let va = v.iter().zip(&self.alpha).map(|(x, y)| x * y).sum::<f64>();
@@ -307,8 +346,8 @@ impl<'t, M: MeanSdf> Conditioning<'t, M> {
         }
     }
 
-    fn observe_memory(&mut self, a: Functional, observed: f64) {
-        self.append(a, observed, None);
+    fn observe_memory(&mut self, a: Functional, la: K::Local, observed: f64) {
+        self.append(a, la, observed, None);
         self.memory_len = self.obs.len();
     }
 
@@ -323,49 +362,69 @@ impl<'t, M: MeanSdf> Conditioning<'t, M> {
     }
 
     /// Conditional mean and covariance (row-major) of `targets` given every observation.
-    fn predict(&self, targets: &[Functional]) -> (Vec<f64>, Vec<f64>) {
+    fn predict(&self, targets: &[(Functional, K::Local)]) -> (Vec<f64>, Vec<f64>) {
         let m = targets.len();
-        let v: Vec<Vec<f64>> = targets.iter().map(|t| self.solve_k(t)).collect();
+        let v: Vec<Vec<f64>> = targets.iter().map(|(t, lt)| self.solve_k(t, lt)).collect();
         let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
-        let mean: Vec<f64> = targets.iter().zip(&v).map(|(t, vt)| self.prior_mean(t) + dot(vt, &self.alpha)).collect();
+        let mean: Vec<f64> = targets.iter().zip(&v).map(|((t, _), vt)| self.prior_mean(t) + dot(vt, &self.alpha)).collect();
         let mut cov = vec![0.0; m * m];
         for i in 0..m {
             for j in 0..m {
-                cov[i * m + j] = self.kernel.covariance(&targets[i], &targets[j]) - dot(&v[i], &v[j]);
+                cov[i * m + j] = self.kernel.covariance(&targets[i].0, &targets[i].1, &targets[j].0, &targets[j].1) - dot(&v[i], &v[j]);
             }
             cov[i * m + i] = cov[i * m + i].max(0.0);
         }
         (mean, cov)
     }
 
-    /// Draws `f(p)` from its conditional law and appends it to the observations.
-    fn sample_value(&mut self, p: DVec3, uniform: &mut impl FnMut() -> f64) -> f64 {
+    /// Draws `f(p)` (kernel data `lp`) from its conditional law and appends it to the
+    /// observations.
+    fn sample_value(&mut self, p: DVec3, lp: K::Local, uniform: &mut impl FnMut() -> f64) -> f64 {
         let a = Functional::Value(p);
-        let v = self.solve_k(&a);
+        let v = self.solve_k(&a, &lp);
         let mean = self.prior_mean(&a) + v.iter().zip(&self.alpha).map(|(x, y)| x * y).sum::<f64>();
-        let var = (self.kernel.variance(&a) - v.iter().map(|x| x * x).sum::<f64>()).max(0.0);
+        let var = (self.kernel.variance(&a, &lp) - v.iter().map(|x| x * x).sum::<f64>()).max(0.0);
         let f = mean + var.sqrt() * standard_normal(uniform);
-        self.append(a, f, Some(v));
+        self.append(a, lp, f, Some(v));
         f
     }
 }
 
 impl<'a, M: MeanSdf> GpisTracer<'a, M> {
-    /// A tracer with default [`MarchSettings`].
+    /// A stationary GPIS with default [`MarchSettings`].
     pub fn new(mean: &'a M, kernel: SeKernel) -> Self {
-        GpisTracer { mean, kernel, settings: MarchSettings::default() }
+        GpisTracer::with_field(mean, kernel, &CONSTANT)
+    }
+}
+
+impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
+    /// A GPIS whose kernel's local parameters `field` gives ([`FieldKernel`]; `kernel` for what
+    /// it leaves unset), with default [`MarchSettings`]. The field's `sigma_max` must bound its
+    /// `σ` (the envelope is drawn at it); a trace that meets a larger one fails.
+    pub fn with_field(mean: &'a M, kernel: SeKernel, field: &'a F) -> Self {
+        GpisTracer { mean, kernel, field, settings: MarchSettings::default() }
     }
 
-    /// The step along `d`: `Δt` of [`MarchSettings::step_correlation`], capped at
-    /// `max_step · σ`.
+    /// The largest `σ` of the process: the field's `sigma_max`, else the kernel's `σ`.
+    pub fn sigma_max(&self) -> f64 {
+        sigma_max(&self.kernel, self.field)
+    }
+
+    /// The stationary step along `d`: `Δt` of [`MarchSettings::step_correlation`], capped at
+    /// `max_step · σ` (with a field, steps follow the local kernel).
     pub fn step(&self, d: DVec3) -> f64 {
-        let rho = self.settings.step_correlation.clamp(1e-6, 1.0 - 1e-12);
-        self.kernel.step_for_correlation(d, rho).min(self.settings.max_step * self.kernel.sigma)
+        self.local_step(&self.kernel, &(), d)
     }
 
-    fn conditioning(&self, origin: DVec3, start: &StartState) -> Conditioning<'a, M> {
+    /// The step at a point whose kernel data is `la`.
+    fn local_step<K: Covariance>(&self, kernel: &K, la: &K::Local, d: DVec3) -> f64 {
+        let rho = self.settings.step_correlation.clamp(1e-6, 1.0 - 1e-12);
+        kernel.step_for_correlation(la, d, rho).min(self.settings.max_step * kernel.sigma(la))
+    }
+
+    fn conditioning<'t, K: Covariance>(&'t self, kernel: &'t K, origin: DVec3, start: &StartState) -> Result<Conditioning<'t, M, K>> {
         let mut c = Conditioning {
-            kernel: self.kernel,
+            kernel,
             mean: self.mean,
             jitter: self.settings.jitter,
             eps: self.settings.jitter.max(1e-15),
@@ -376,28 +435,37 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
             alpha: Vec::new(),
         };
         if let StartState::OnSurface { gradient } = *start {
-            c.observe_memory(Functional::Value(origin), 0.0);
+            let lo = kernel.local(origin, gradient.is_some())?;
+            c.observe_memory(Functional::Value(origin), lo, 0.0);
             if let Some(g) = gradient {
-                let w = self.kernel.inverse_squared_lengths();
                 for i in 0..3 {
-                    if w[i] > 0.0 && g[i].is_finite() {
-                        c.observe_memory(Functional::Partial(origin, i), g[i]);
+                    if kernel.random_partial(&lo, i) && g[i].is_finite() {
+                        c.observe_memory(Functional::Partial(origin, i), lo, g[i]);
                     }
                 }
             }
         }
-        c
+        Ok(c)
     }
 
     /// Samples the realization at `o + t d` for each `t` of `ts` in order, each value conditioned
     /// on the start state's memory and the window of previous values (steps 2–3 of the module
     /// documentation; no envelope, no truncation: `Uncorrelated` behaves like `Unconditioned`).
-    pub fn sample_along(&self, origin: DVec3, d: DVec3, ts: &[f64], start: &StartState, uniform: &mut impl FnMut() -> f64) -> Vec<f64> {
-        let mut c = self.conditioning(origin, start);
+    pub fn sample_along(&self, origin: DVec3, d: DVec3, ts: &[f64], start: &StartState, uniform: &mut impl FnMut() -> f64) -> Result<Vec<f64>> {
+        if self.field.varies() {
+            self.sample_along_with(&FieldKernel::new(self.kernel, self.mean, self.field), origin, d, ts, start, uniform)
+        } else {
+            self.sample_along_with(&self.kernel, origin, d, ts, start, uniform)
+        }
+    }
+
+    fn sample_along_with<K: Covariance>(&self, kernel: &K, origin: DVec3, d: DVec3, ts: &[f64], start: &StartState, uniform: &mut impl FnMut() -> f64) -> Result<Vec<f64>> {
+        let mut c = self.conditioning(kernel, origin, start)?;
         ts.iter()
             .map(|&t| {
                 c.evict_if_needed();
-                c.sample_value(origin + t * d, uniform)
+                let p = origin + t * d;
+                Ok(c.sample_value(p, kernel.local(p, false)?, uniform))
             })
             .collect()
     }
@@ -405,42 +473,67 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
     /// The first entering crossing along `x(t) = o + t d`, `t ∈ (0, t_max]` (`d` unit, the
     /// propagation direction; `t_max = ∞` allowed). `None` when the ray misses or the march is
     /// exhausted (see [`Self::trace`] to tell those apart).
-    pub fn first_crossing(&self, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Option<Crossing> {
-        self.trace(origin, d, t_max, start, uniform).crossing()
+    pub fn first_crossing(&self, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Result<Option<Crossing>> {
+        Ok(self.trace(origin, d, t_max, start, uniform)?.crossing())
     }
 
     /// Marches one segment (module documentation, steps 1–5). Invalid input (non-finite origin or
-    /// direction, zero direction, NaN `t_max`) gives [`Trace::Miss`]; `d` is normalised.
-    pub fn trace(&self, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Trace {
-        let Some(d) = d.try_normalize() else { return Trace::Miss };
-        if !origin.is_finite() || t_max.is_nan() || !(t_max > 0.0) {
-            return Trace::Miss;
+    /// direction, zero direction, NaN `t_max`) gives [`Trace::Miss`]; `d` is normalised. Fails
+    /// only when the field does (a callback's failure, invalid parameters, a `σ` above its
+    /// `sigma_max`).
+    pub fn trace(&self, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Result<Trace> {
+        if !self.field.varies() {
+            return self.march(&self.kernel, origin, d, t_max, start, uniform);
         }
-        let sigma = self.kernel.sigma;
-        let env = self.settings.envelope * sigma;
-        let step = self.step(d);
-        let mut c = self.conditioning(origin, start);
+        let trace = self.march(&FieldKernel::new(self.kernel, self.mean, self.field), origin, d, t_max, start, uniform)?;
+        // Lengthscales or variances at the ends of f64's range make the conditional laws
+        // overflow; such a crossing is an error, never a NaN.
+        if let Trace::Hit(c) = trace {
+            if !(c.t.is_finite() && c.point.is_finite() && c.gradient.is_finite()) {
+                return Err(Error::new(
+                    ErrorKind::InvalidArgument,
+                    format!("the gpis field's parameters near {} make the process degenerate (crossing {c:?})", c.point),
+                ));
+            }
+        }
+        Ok(trace)
+    }
+
+    fn march<K: Covariance>(&self, kernel: &K, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Result<Trace> {
+        let Some(d) = d.try_normalize() else { return Ok(Trace::Miss) };
+        if !origin.is_finite() || t_max.is_nan() || !(t_max > 0.0) {
+            return Ok(Trace::Miss);
+        }
+        let env = self.settings.envelope * kernel.region_sigma();
+        let mut c = self.conditioning(kernel, origin, start)?;
         let mut t = 0.0;
+        // The kernel's data where the march stands (its step starts there).
+        let mut here;
         let mut f_prev = match *start {
-            StartState::OnSurface { .. } => 0.0,
+            StartState::OnSurface { .. } => {
+                here = kernel.local(origin, false)?;
+                0.0
+            }
             StartState::Uncorrelated | StartState::Unconditioned => {
                 // Sphere tracing on the mean down to the envelope.
                 for _ in 0..10_000 {
                     let x = origin + t * d;
                     let m = self.mean.value(x);
-                    if !(m > env + 1e-3 * sigma) {
+                    if !(m > env + 1e-3 * kernel.region_sigma()) {
                         break;
                     }
                     if d.dot(self.mean.gradient(x)) >= 0.0 {
-                        return Trace::Miss;
+                        return Ok(Trace::Miss);
                     }
                     t += m - env;
                     if t > t_max {
-                        return Trace::Miss;
+                        return Ok(Trace::Miss);
                     }
                 }
                 let x = origin + t * d;
                 let m = self.mean.value(x);
+                here = kernel.local(x, false)?;
+                let sigma = kernel.sigma(&here);
                 let f0 = if *start == StartState::Uncorrelated {
                     // Truncated to f > 0: z > a = −m/σ, by inverting the upper tail.
                     let a = -m / sigma;
@@ -455,10 +548,10 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
                 } else {
                     m + sigma * standard_normal(uniform)
                 };
-                c.append(Functional::Value(x), f0, None);
+                c.append(Functional::Value(x), here, f0, None);
                 if f0 <= 0.0 {
                     // Unconditioned start inside: the "crossing" is the origin itself.
-                    return Trace::Hit(self.sample_normal(&mut c, x, t, d, uniform));
+                    return Ok(Trace::Hit(self.sample_normal(&mut c, x, t, d, uniform)?));
                 }
                 f0
             }
@@ -466,43 +559,54 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
         let mut count = 0usize;
         loop {
             if t >= t_max {
-                return Trace::Miss;
+                return Ok(Trace::Miss);
             }
-            let t_next = (t + step).min(t_max);
-            let x = origin + t_next * d;
+            let step = self.local_step(kernel, &here, d);
+            let mut t_next = (t + step).min(t_max);
+            let mut x = origin + t_next * d;
+            let mut there = kernel.local(x, false)?;
+            // A shorter correlation length ahead (a field that changes along the ray) shortens
+            // the step to it, so that no step spans more than ρ of correlation at either end.
+            let ahead = self.local_step(kernel, &there, d);
+            if ahead < step {
+                t_next = (t + ahead).min(t_max);
+                x = origin + t_next * d;
+                there = kernel.local(x, false)?;
+            }
             if self.mean.value(x) > env && d.dot(self.mean.gradient(x)) >= 0.0 {
-                return Trace::Miss;
+                return Ok(Trace::Miss);
             }
             c.evict_if_needed();
-            let f = c.sample_value(x, uniform);
+            let f = c.sample_value(x, there, uniform);
             if f <= 0.0 {
-                return Trace::Hit(self.locate(&mut c, origin, d, (t, f_prev), (t_next, f), uniform));
+                return Ok(Trace::Hit(self.locate(&mut c, origin, d, (t, f_prev), (t_next, f), uniform)?));
             }
             t = t_next;
             f_prev = f;
+            here = there;
             count += 1;
             if count >= self.settings.max_points {
-                return Trace::Exhausted { t };
+                return Ok(Trace::Exhausted { t });
             }
         }
     }
 
     /// Conditioned bisection of the bracket `a = (t_a, f_a ≥ 0)`, `b = (t_b, f_b ≤ 0)`, linear
     /// interpolation, then the normal.
-    fn locate(
+    fn locate<K: Covariance>(
         &self,
-        c: &mut Conditioning<'a, M>,
+        c: &mut Conditioning<'_, M, K>,
         origin: DVec3,
         d: DVec3,
         a: (f64, f64),
         b: (f64, f64),
         uniform: &mut impl FnMut() -> f64,
-    ) -> Crossing {
+    ) -> Result<Crossing> {
         let ((mut ta, mut fa), (mut tb, mut fb)) = (a, b);
         for _ in 0..self.settings.bisection_levels {
             let tm = 0.5 * (ta + tb);
             let p = origin + tm * d;
-            let f = c.sample_value(p, uniform);
+            let f = c.sample_value(p, c.kernel.local(p, false)?, uniform);
             if f > 0.0 {
                 (ta, fa) = (tm, f);
             } else {
@@ -511,14 +615,15 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
         }
         let tc = if fa - fb > 0.0 { ta + (tb - ta) * (fa / (fa - fb)).clamp(0.0, 1.0) } else { tb };
         let xc = origin + tc * d;
-        c.append(Functional::Value(xc), 0.0, None);
+        c.append(Functional::Value(xc), c.kernel.local(xc, false)?, 0.0, None);
         self.sample_normal(c, xc, tc, d, uniform)
     }
 
     /// Draws `∇f(xc)` given every observation, with `d · ∇f < 0` (truncated normal), and builds
     /// the crossing.
-    fn sample_normal(&self, c: &mut Conditioning<'a, M>, xc: DVec3, tc: f64, d: DVec3, uniform: &mut impl FnMut() -> f64) -> Crossing {
-        let targets = [Functional::Partial(xc, 0), Functional::Partial(xc, 1), Functional::Partial(xc, 2)];
+    fn sample_normal<K: Covariance>(&self, c: &mut Conditioning<'_, M, K>, xc: DVec3, tc: f64, d: DVec3, uniform: &mut impl FnMut() -> f64) -> Result<Crossing> {
+        let lc = c.kernel.local(xc, true)?;
+        let targets = [(Functional::Partial(xc, 0), lc), (Functional::Partial(xc, 1), lc), (Functional::Partial(xc, 2), lc)];
         let (mean, cov) = c.predict(&targets);
         let m = DVec3::from_slice(&mean);
         let s = |i: usize, j: usize| cov[i * 3 + j];
@@ -555,6 +660,6 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
         if n.dot(d) > 0.0 {
             n = -n;
         }
-        Crossing { t: tc, point: xc, gradient: g, normal: n }
+        Ok(Crossing { t: tc, point: xc, gradient: g, normal: n, local: c.kernel.params(&lc) })
     }
 }

@@ -1193,15 +1193,15 @@ static void test_gpis(void) {
 
   mf_gpis *g = build_gpis("renewal_plus");
   double envelope = 0;
-  EXPECT_OK(mf_gpis_envelope(g, &envelope));
+  EXPECT_OK(mf_gpis_envelope(g, NULL, &envelope));
   CHECK_REL(envelope, 6.0, 1e-15); /* default band: 6 sigma */
 
   const mf_vec3 down = v3(0, 0, -1);
   const mf_gpis_start free_start = {MF_GPIS_START_FREE, {0, 0, 0}};
   int calls = 0;
   mf_gpis_hit a, b;
-  EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, v3(0, 0, envelope), down, INFINITY, &free_start, 42, &a));
-  EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, v3(0, 0, envelope), down, INFINITY, &free_start, 42, &b));
+  EXPECT_OK(mf_gpis_trace(g, plane_sdf, NULL, &calls, v3(0, 0, envelope), down, INFINITY, &free_start, 42, &a));
+  EXPECT_OK(mf_gpis_trace(g, plane_sdf, NULL, &calls, v3(0, 0, envelope), down, INFINITY, &free_start, 42, &b));
   CHECK(calls > 0, "the sdf callback was never called");
   CHECK(a.hit && b.hit && a.t == b.t && same_bits(&a.normal, &b.normal, sizeof a.normal) &&
             same_bits(&a.gradient, &b.gradient, sizeof a.gradient),
@@ -1230,7 +1230,7 @@ static void test_gpis(void) {
     const mf_vec3 origin = v3(-envelope * d.x / d.z, 0, envelope);
     for (uint64_t seed = 0; seed < 2000; ++seed) {
       mf_gpis_hit h;
-      EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, origin, d, INFINITY, &free_start, seed, &h));
+      EXPECT_OK(mf_gpis_trace(g, plane_sdf, NULL, &calls, origin, d, INFINITY, &free_start, seed, &h));
       if (h.hit) {
         ++hits;
         sum += h.point.z;
@@ -1248,19 +1248,19 @@ static void test_gpis(void) {
   /* Scattering: gold Fresnel at the reflection angle, mirror direction; behind the normal: invalid. */
   phase_sample_t s;
   const mf_vec3 wi = v3(0.6, 0, 0.8);
-  EXPECT_OK(mf_gpis_scatter(g, wi, v3(0, 0, 1), &s));
+  EXPECT_OK(mf_gpis_scatter(g, NULL, wi, v3(0, 0, 1), &s));
   CHECK(s.valid && fabs(s.wo.x + 0.6) < 1e-15 && fabs(s.wo.z - 0.8) < 1e-15 && s.pdf == 0.0,
         "reflection of (0.6, 0, 0.8): (%g %g %g)", s.wo.x, s.wo.y, s.wo.z);
   CHECK(s.weight.r > s.weight.g && s.weight.g > s.weight.b && s.weight.r < 1.0, "gold weight %g %g %g", s.weight.r,
         s.weight.g, s.weight.b);
-  EXPECT_OK(mf_gpis_scatter(g, wi, v3(0, 0, -1), &s));
+  EXPECT_OK(mf_gpis_scatter(g, NULL, wi, v3(0, 0, -1), &s));
   CHECK(!s.valid, "a direction behind the normal cannot reflect");
 
   /* Renewal+ continues from the crossing with its gradient; the next segment leaves upward. */
-  EXPECT_OK(mf_gpis_scatter(g, v3(0, 0, 1), a.normal, &s));
+  EXPECT_OK(mf_gpis_scatter(g, NULL, v3(0, 0, 1), a.normal, &s));
   const mf_gpis_start on = {MF_GPIS_START_ON_SURFACE, a.gradient};
   mf_gpis_hit next;
-  EXPECT_OK(mf_gpis_trace(g, plane_sdf, &calls, a.point, s.wo, INFINITY, &on, 7, &next));
+  EXPECT_OK(mf_gpis_trace(g, plane_sdf, NULL, &calls, a.point, s.wo, INFINITY, &on, 7, &next));
   CHECK(!next.hit || next.t > 0.0, "a continuation crossing lies ahead");
 
   /* Bad calls leave the output untouched. */
@@ -1274,36 +1274,36 @@ static void test_gpis(void) {
     CHECK(same_bits(before, &h, sizeof h), "%s wrote its out-parameter on failure", #call); \
   } while (0)
   const mf_vec3 o = v3(0, 0, 1);
-  HIT_CASE(mf_gpis_trace(NULL, plane_sdf, &calls, o, down, 1, &free_start, 1, &h), MF_ERROR_NULL_POINTER, "gpis");
-  HIT_CASE(mf_gpis_trace(g, NULL, &calls, o, down, 1, &free_start, 1, &h), MF_ERROR_NULL_POINTER, "sdf");
-  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, NULL, 1, &h), MF_ERROR_NULL_POINTER, "start");
-  EXPECT_STATUS(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, &free_start, 1, NULL), MF_ERROR_NULL_POINTER, "out_hit");
-  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, v3(NAN, 0, 0), down, 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "origin");
-  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, v3(0, 0, -2), 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
-  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 0.0, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "t_max");
-  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, NAN, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "t_max");
+  HIT_CASE(mf_gpis_trace(NULL, plane_sdf, NULL, &calls, o, down, 1, &free_start, 1, &h), MF_ERROR_NULL_POINTER, "gpis");
+  HIT_CASE(mf_gpis_trace(g, NULL, NULL, &calls, o, down, 1, &free_start, 1, &h), MF_ERROR_NULL_POINTER, "sdf");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, NULL, &calls, o, down, 1, NULL, 1, &h), MF_ERROR_NULL_POINTER, "start");
+  EXPECT_STATUS(mf_gpis_trace(g, plane_sdf, NULL, &calls, o, down, 1, &free_start, 1, NULL), MF_ERROR_NULL_POINTER, "out_hit");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, NULL, &calls, v3(NAN, 0, 0), down, 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "origin");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, NULL, &calls, o, v3(0, 0, -2), 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, NULL, &calls, o, down, 0.0, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "t_max");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, NULL, &calls, o, down, NAN, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "t_max");
   const mf_gpis_start bad_kind = {7, {0, 0, 1}};
-  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, &bad_kind, 1, &h), MF_ERROR_INVALID_ARGUMENT, "start.kind");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, NULL, &calls, o, down, 1, &bad_kind, 1, &h), MF_ERROR_INVALID_ARGUMENT, "start.kind");
   const mf_gpis_start bad_gradient = {MF_GPIS_START_ON_SURFACE, {NAN, 0, 1}};
-  HIT_CASE(mf_gpis_trace(g, plane_sdf, &calls, o, down, 1, &bad_gradient, 1, &h), MF_ERROR_INVALID_ARGUMENT, "gradient");
-  HIT_CASE(mf_gpis_trace(g, nan_sdf, NULL, o, down, 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "sdf callback");
+  HIT_CASE(mf_gpis_trace(g, plane_sdf, NULL, &calls, o, down, 1, &bad_gradient, 1, &h), MF_ERROR_INVALID_ARGUMENT, "gradient");
+  HIT_CASE(mf_gpis_trace(g, nan_sdf, NULL, NULL, o, down, 1, &free_start, 1, &h), MF_ERROR_INVALID_ARGUMENT, "sdf callback");
   double x = 123.0;
-  EXPECT_STATUS(mf_gpis_envelope(NULL, &x), MF_ERROR_NULL_POINTER, "gpis");
-  EXPECT_STATUS(mf_gpis_envelope(g, NULL), MF_ERROR_NULL_POINTER, "out_envelope");
+  EXPECT_STATUS(mf_gpis_envelope(NULL, NULL, &x), MF_ERROR_NULL_POINTER, "gpis");
+  EXPECT_STATUS(mf_gpis_envelope(g, NULL, NULL), MF_ERROR_NULL_POINTER, "out_envelope");
   CHECK(x == 123.0, "mf_gpis_envelope wrote its out-parameter on failure");
   memset(&s, 0xA5, sizeof s);
   phase_sample_t before = s;
-  EXPECT_STATUS(mf_gpis_scatter(NULL, wi, o, &s), MF_ERROR_NULL_POINTER, "gpis");
-  EXPECT_STATUS(mf_gpis_scatter(g, v3(NAN, 0, 1), o, &s), MF_ERROR_INVALID_ARGUMENT, "wi");
-  EXPECT_STATUS(mf_gpis_scatter(g, wi, v3(0, 0, 3), &s), MF_ERROR_INVALID_ARGUMENT, "normal");
-  EXPECT_STATUS(mf_gpis_scatter(g, wi, o, NULL), MF_ERROR_NULL_POINTER, "out_sample");
+  EXPECT_STATUS(mf_gpis_scatter(NULL, NULL, wi, o, &s), MF_ERROR_NULL_POINTER, "gpis");
+  EXPECT_STATUS(mf_gpis_scatter(g, NULL, v3(NAN, 0, 1), o, &s), MF_ERROR_INVALID_ARGUMENT, "wi");
+  EXPECT_STATUS(mf_gpis_scatter(g, NULL, wi, v3(0, 0, 3), &s), MF_ERROR_INVALID_ARGUMENT, "normal");
+  EXPECT_STATUS(mf_gpis_scatter(g, NULL, wi, o, NULL), MF_ERROR_NULL_POINTER, "out_sample");
   CHECK(same_bits(&before, &s, sizeof s), "mf_gpis_scatter wrote its out-parameter on failure");
 #undef HIT_CASE
   mf_gpis_free(g);
 
   mf_gpis *renewal = build_gpis("renewal");
   mf_gpis_hit r;
-  EXPECT_OK(mf_gpis_trace(renewal, plane_sdf, &calls, v3(0, 0, 6), down, INFINITY, &free_start, 3, &r));
+  EXPECT_OK(mf_gpis_trace(renewal, plane_sdf, NULL, &calls, v3(0, 0, 6), down, INFINITY, &free_start, 3, &r));
   CHECK(r.hit, "renewal trace must hit the plane");
   mf_gpis_free(renewal);
 }
@@ -1721,6 +1721,129 @@ static void test_fields(void) {
   mf_medium_free(m);
 }
 
+/* A host field for test_gpis_fields, sharing the trace's user_data with plane_sdf (which counts
+ * in the first member): sigma 0.5 below x = 0 and 0.8 above with a reflectance scale of one half
+ * (mode 0), nothing set (mode 1: the GPIS's own parameters), a callback failure (mode 2), a sigma
+ * above the field's sigma_max (mode 3), a non-positive-definite anisotropy (mode 4). */
+typedef struct gpis_host {
+  int sdf_calls; /* first: plane_sdf increments *(int *)user_data */
+  int mode;
+  int field_calls;
+} gpis_host;
+
+static int32_t gpis_field_at(void *user_data, mf_vec3 p, const mf_surface_point *point, mf_local_params *out) {
+  gpis_host *h = (gpis_host *)user_data;
+  h->field_calls++;
+  CHECK(fabs(point->f - p.z) < 1e-12 && point->normal.z == 1.0, "the field sees the mean: f %g at z %g", point->f, p.z);
+  memset(out, 0, sizeof *out);
+  switch (h->mode) {
+    case 0:
+      out->set = MF_LOCAL_SIGMA | MF_LOCAL_REFLECTANCE_SCALE;
+      out->sigma = p.x < 0 ? 0.5 : 0.8;
+      out->reflectance_scale = (mf_rgb){0.5, 0.5, 0.5};
+      return 0;
+    case 1:
+      return 0;
+    case 2:
+      return 9;
+    case 3:
+      out->set = MF_LOCAL_SIGMA;
+      out->sigma = 2.0;
+      return 0;
+    default:
+      out->set = MF_LOCAL_SIGMA | MF_LOCAL_ANISOTROPY;
+      out->sigma = 0.5;
+      out->anisotropy[0] = 1, out->anisotropy[1] = 1, out->anisotropy[2] = 1, out->anisotropy[3] = 2;
+      return 0;
+  }
+}
+
+static int32_t gpis_field_bounds(void *user_data, mf_vec3 p, mf_vec3 d, double length, mf_param_bounds *out) {
+  (void)user_data, (void)p, (void)d, (void)length;
+  out->set = MF_LOCAL_SIGMA;
+  out->sigma_lo = 0.5, out->sigma_hi = 0.8, out->alpha_lo = out->alpha_hi = 0;
+  return 0;
+}
+
+/* mf_gpis_* with a field: a field that sets nothing traces exactly as no field; a stepped field
+ * widens the envelope to shell_extent * sigma_max, reports its parameters at the crossings, and
+ * its reflectance scale halves the scattering weight; bad fields get statuses and messages. */
+static void test_gpis_fields(void) {
+  mf_gpis *g = build_gpis("renewal_plus");
+  mf_field *field = NULL;
+  const mf_field_callbacks cb = {gpis_field_at, gpis_field_bounds, 0.8};
+  EXPECT_OK(mf_field_new_callbacks(&cb, &field));
+  double envelope = 0, own_envelope = 0;
+  EXPECT_OK(mf_gpis_envelope(g, field, &envelope));
+  EXPECT_OK(mf_gpis_envelope(g, NULL, &own_envelope));
+  CHECK_REL(envelope, 6.0 * 0.8, 1e-15);
+  CHECK_REL(own_envelope, 6.0, 1e-15);
+
+  /* sigma_max 0: sigma does not vary (the GPIS's own 1 holds everywhere). */
+  mf_field *own_field = NULL;
+  const mf_field_callbacks own_cb = {gpis_field_at, gpis_field_bounds, 0};
+  EXPECT_OK(mf_field_new_callbacks(&own_cb, &own_field));
+  EXPECT_OK(mf_gpis_envelope(g, own_field, &own_envelope));
+  CHECK_REL(own_envelope, 6.0, 1e-15);
+  const mf_gpis_start free_start = {MF_GPIS_START_FREE, {0, 0, 0}};
+  const mf_vec3 d = normalize(v3(0.3, 0.1, -1));
+  gpis_host own = {0, 1, 0};
+  for (uint64_t seed = 0; seed < 20; ++seed) {
+    mf_gpis_hit plain, through;
+    EXPECT_OK(mf_gpis_trace(g, plane_sdf, NULL, &own, v3(0, 0, 3), d, INFINITY, &free_start, seed, &plain));
+    EXPECT_OK(mf_gpis_trace(g, plane_sdf, own_field, &own, v3(0, 0, 3), d, INFINITY, &free_start, seed, &through));
+    CHECK(plain.hit && through.hit && plain.t == through.t && same_bits(&plain.gradient, &through.gradient, sizeof plain.gradient),
+          "seed %u: a field of the GPIS's own parameters changed the realization (t %.17g vs %.17g)", (unsigned)seed, plain.t, through.t);
+    CHECK(through.local.set == 0 && plain.local.set == 0, "nothing set: local.set %u", through.local.set);
+  }
+  CHECK(own.field_calls > 0, "the field must be asked");
+
+  gpis_host stepped = {0, 0, 0};
+  int left = 0, right = 0;
+  for (uint64_t seed = 0; seed < 40; ++seed) {
+    mf_gpis_hit h;
+    const mf_vec3 origin = v3(seed % 2 ? 2.0 : -2.0, 0, envelope);
+    EXPECT_OK(mf_gpis_trace(g, plane_sdf, field, &stepped, origin, v3(0, 0, -1), INFINITY, &free_start, seed, &h));
+    CHECK(h.hit && h.local.set == (MF_LOCAL_SIGMA | MF_LOCAL_REFLECTANCE_SCALE), "stepped: hit %d, set %u", (int)h.hit, h.local.set);
+    CHECK(h.local.sigma == (h.point.x < 0 ? 0.5 : 0.8), "local sigma %g at x = %g", h.local.sigma, h.point.x);
+    left += h.point.x < 0, right += h.point.x >= 0;
+    /* The crossing's reflectance scale halves the weight; the direction does not change. */
+    phase_sample_t full, half;
+    EXPECT_OK(mf_gpis_scatter(g, NULL, h.normal, h.normal, &full));
+    EXPECT_OK(mf_gpis_scatter(g, &h.local, h.normal, h.normal, &half));
+    CHECK(full.valid && half.valid && same_bits(&full.wo, &half.wo, sizeof full.wo) && fabs(half.weight.r - 0.5 * full.weight.r) < 1e-15,
+          "reflectance scale: %g vs %g", half.weight.r, full.weight.r);
+  }
+  CHECK(left == 20 && right == 20, "crossings on both sides: %d, %d", left, right);
+
+  /* Bad fields: the call fails at once with a status and a message, the output untouched. */
+  const struct {
+    int mode;
+    mf_status status;
+    const char *needle;
+  } bad[] = {{2, MF_ERROR_CALLBACK, "returned 9"}, {3, MF_ERROR_INVALID_ARGUMENT, "sigma_max"}, {4, MF_ERROR_INVALID_ARGUMENT, "positive definite"}};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+    gpis_host host = {0, bad[i].mode, 0};
+    mf_gpis_hit h, before;
+    memset(&h, 0xA5, sizeof h);
+    before = h;
+    EXPECT_STATUS(mf_gpis_trace(g, plane_sdf, field, &host, v3(0, 0, 3), d, INFINITY, &free_start, 1, &h), bad[i].status, bad[i].needle);
+    CHECK(same_bits(&before, &h, sizeof h), "a failed field trace wrote its out-parameter");
+    CHECK(host.field_calls == 1, "mode %d: a bad field answer must end the trace at once (%d calls)", bad[i].mode, host.field_calls);
+  }
+  mf_local_params too_bright;
+  memset(&too_bright, 0, sizeof too_bright);
+  too_bright.set = MF_LOCAL_REFLECTANCE_SCALE;
+  too_bright.reflectance_scale = (mf_rgb){3, 3, 3};
+  phase_sample_t s;
+  EXPECT_STATUS(mf_gpis_scatter(g, &too_bright, v3(0, 0, 1), v3(0, 0, 1), &s), MF_ERROR_INVALID_ARGUMENT, "outside [0, 1]");
+  too_bright.set = 0x40;
+  EXPECT_STATUS(mf_gpis_scatter(g, &too_bright, v3(0, 0, 1), v3(0, 0, 1), &s), MF_ERROR_INVALID_ARGUMENT, "unknown bits");
+  mf_field_free(field);
+  mf_field_free(own_field);
+  mf_gpis_free(g);
+}
+
 int main(void) {
   test_last_error_message(); /* first: checks the fresh-thread state */
   test_version_and_status();
@@ -1735,6 +1858,7 @@ int main(void) {
   test_gpis();
   test_surfaces_and_tracking();
   test_fields();
+  test_gpis_fields();
   if (g_failures) {
     fprintf(stderr, "abi_test: %d of %d checks FAILED\n", g_failures, g_checks);
     return 1;

@@ -12,6 +12,7 @@ pub mod reference;
 pub use reference::gauss_legendre;
 
 pub mod meshes;
+pub mod planar;
 
 /// `∫_{S²} f(ω) dω` with Gauss–Legendre panels in θ graded toward both poles (where peaked NDFs
 /// concentrate) and in φ. `panels` per hemisphere in θ, `n_phi` panels in φ, 8 nodes each.

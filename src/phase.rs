@@ -10,7 +10,7 @@
 //! `p(wi, wo) = F D(m) / (4 σ(-wi))`. Reciprocity holds for the BRDF that emerges from a slab,
 //! not event by event.
 
-use crate::ndf::{BeckmannUniformMixture, MicrofacetDistribution, Ndf};
+use crate::ndf::{BeckmannUniformMixture, MicrofacetDistribution, Ndf, NormalUniformMixture};
 use crate::fresnel::fresnel_conductor_rgb;
 use crate::Rgb;
 use glam::DVec3;
@@ -56,6 +56,8 @@ pub enum VndfSampling {
     Exact,
     /// The Beckmann + uniform-hemisphere mixture of Eq. 40 (generalized NDF, specular flakes).
     Mixture(BeckmannUniformMixture),
+    /// `D(m)(m·n)` + uniform-hemisphere mixture of seeds/001 Appendix B (height fields).
+    NormalMixture(NormalUniformMixture),
 }
 
 /// A sampled scattering direction.
@@ -142,6 +144,7 @@ impl MacrofacetPhase {
                 let m = match self.sampling {
                     VndfSampling::Exact => self.ndf.sample_visible(wi, u_normal)?,
                     VndfSampling::Mixture(mix) => mix.sample(wi, u_normal)?,
+                    VndfSampling::NormalMixture(mix) => mix.sample(&self.ndf, wi, u_normal)?,
                 };
                 let cos = wi.dot(m);
                 if cos <= 0.0 {
@@ -154,8 +157,13 @@ impl MacrofacetPhase {
                     return None;
                 }
                 let weight = match self.sampling {
-                    VndfSampling::Exact => f,
-                    VndfSampling::Mixture(_) => {
+                    // eval/pdf = F · sampling_area/area: F itself unless Λ is a model.
+                    VndfSampling::Exact if self.ndf.lambda_is_projected_area() => f,
+                    VndfSampling::Exact => {
+                        let ratio = self.ndf.sampling_projected_area(wi) / self.ndf.projected_area(wi);
+                        f.map(|x| x * ratio)
+                    }
+                    VndfSampling::Mixture(_) | VndfSampling::NormalMixture(_) => {
                         let value = self.ndf.d(m) / (4.0 * self.ndf.projected_area(wi));
                         f.map(|x| x * value / pdf)
                     }
@@ -170,6 +178,7 @@ impl MacrofacetPhase {
         match self.sampling {
             VndfSampling::Exact => self.ndf.pdf_visible(wi, m),
             VndfSampling::Mixture(mix) => mix.pdf(wi, m),
+            VndfSampling::NormalMixture(mix) => mix.pdf(&self.ndf, wi, m),
         }
     }
 

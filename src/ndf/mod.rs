@@ -16,12 +16,18 @@ mod beckmann;
 mod gaussian_gradient;
 mod ggx;
 mod gpss;
+mod gtr;
+mod ltmd;
 mod mixture;
+mod normal_mixture;
 
 pub use beckmann::Beckmann;
 pub use ggx::Ggx;
 pub use gpss::Gpss;
+pub use gtr::{Gtr, GtrLambda, MAX_GAMMA};
+pub use ltmd::{Ltmd, LtmdBase};
 pub use mixture::BeckmannUniformMixture;
+pub use normal_mixture::NormalUniformMixture;
 
 use glam::DVec3;
 
@@ -44,13 +50,30 @@ pub trait MicrofacetDistribution {
     /// is visible from `wi` (zero projected area).
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3>;
 
+    /// The projected area that normalises the visible normals [`Self::sample_visible`] draws,
+    /// `∫ <w, m> D(m) dm` of this `D`. It equals [`Self::projected_area`] unless the
+    /// distribution reports a Smith Λ that is a model rather than the projected area of its
+    /// `D` (GTR with Dimov's Λ, seeds/001 Appendix A); then `eval/pdf` of a phase sample
+    /// measures that inconsistency instead of hiding it.
+    fn sampling_projected_area(&self, w: DVec3) -> f64 {
+        self.projected_area(w)
+    }
+
+    /// Samples `m ∝ D(m) (m·n)` (the classic NDF sampling that seeds/001 Eqs. 25–26 transform)
+    /// with two uniforms; `None` when the distribution has no such sampler (normals below the
+    /// horizon).
+    fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
+        let _ = u;
+        None
+    }
+
     /// The density of [`Self::sample_visible`] per solid angle of `m`: `D_wi(m)`.
     fn pdf_visible(&self, wi: DVec3, m: DVec3) -> f64 {
         let cos = wi.dot(m);
         if cos <= 0.0 {
             return 0.0;
         }
-        let area = self.projected_area(wi);
+        let area = self.sampling_projected_area(wi);
         if area > 0.0 {
             cos * self.d(m) / area
         } else {
@@ -65,6 +88,8 @@ pub enum Ndf {
     Beckmann(Beckmann),
     Ggx(Ggx),
     Gpss(Gpss),
+    Gtr(Gtr),
+    Ltmd(Ltmd),
 }
 
 impl MicrofacetDistribution for Ndf {
@@ -73,6 +98,8 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.d(m),
             Ndf::Ggx(x) => x.d(m),
             Ndf::Gpss(x) => x.d(m),
+            Ndf::Gtr(x) => x.d(m),
+            Ndf::Ltmd(x) => x.d(m),
         }
     }
     fn projected_area(&self, w: DVec3) -> f64 {
@@ -80,6 +107,8 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.projected_area(w),
             Ndf::Ggx(x) => x.projected_area(w),
             Ndf::Gpss(x) => x.projected_area(w),
+            Ndf::Gtr(x) => x.projected_area(w),
+            Ndf::Ltmd(x) => x.projected_area(w),
         }
     }
     fn lambda(&self, w: DVec3) -> f64 {
@@ -87,6 +116,8 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.lambda(w),
             Ndf::Ggx(x) => x.lambda(w),
             Ndf::Gpss(x) => x.lambda(w),
+            Ndf::Gtr(x) => x.lambda(w),
+            Ndf::Ltmd(x) => x.lambda(w),
         }
     }
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
@@ -94,6 +125,35 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Beckmann(x) => x.sample_visible(wi, u),
             Ndf::Ggx(x) => x.sample_visible(wi, u),
             Ndf::Gpss(x) => x.sample_visible(wi, u),
+            Ndf::Gtr(x) => x.sample_visible(wi, u),
+            Ndf::Ltmd(x) => x.sample_visible(wi, u),
+        }
+    }
+    fn sampling_projected_area(&self, w: DVec3) -> f64 {
+        match self {
+            Ndf::Beckmann(x) => x.sampling_projected_area(w),
+            Ndf::Ggx(x) => x.sampling_projected_area(w),
+            Ndf::Gpss(x) => x.sampling_projected_area(w),
+            Ndf::Gtr(x) => x.sampling_projected_area(w),
+            Ndf::Ltmd(x) => x.sampling_projected_area(w),
+        }
+    }
+    fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
+        match self {
+            Ndf::Beckmann(x) => x.sample_normal(u),
+            Ndf::Ggx(x) => x.sample_normal(u),
+            Ndf::Gpss(x) => x.sample_normal(u),
+            Ndf::Gtr(x) => x.sample_normal(u),
+            Ndf::Ltmd(x) => x.sample_normal(u),
+        }
+    }
+    fn pdf_visible(&self, wi: DVec3, m: DVec3) -> f64 {
+        match self {
+            Ndf::Beckmann(x) => x.pdf_visible(wi, m),
+            Ndf::Ggx(x) => x.pdf_visible(wi, m),
+            Ndf::Gpss(x) => x.pdf_visible(wi, m),
+            Ndf::Gtr(x) => x.pdf_visible(wi, m),
+            Ndf::Ltmd(x) => x.pdf_visible(wi, m),
         }
     }
 }
@@ -127,6 +187,8 @@ impl Ndf {
                     Ndf::Gpss(Gpss { alpha_x: lo, alpha_y: lo, alpha_z: g.alpha_z }),
                 )
             }
+            Ndf::Gtr(g) => (Ndf::Gtr(g), Ndf::Gtr(g)),
+            Ndf::Ltmd(l) => (Ndf::Ltmd(l.isotropic_bound(true)), Ndf::Ltmd(l.isotropic_bound(false))),
         }
     }
 
@@ -141,6 +203,18 @@ impl Ndf {
             Ndf::Beckmann(b) => gaussian(DVec3::new(b.alpha_u, b.alpha_v, 0.0)),
             Ndf::Ggx(g) => 0.5 * (1.0 + g.alpha_u.max(g.alpha_v).max(1.0)),
             Ndf::Gpss(g) => gaussian(DVec3::new(g.alpha_x, g.alpha_y, g.alpha_z)),
+            // GTR: |∇A| = |∫_{w·m>0} m D dm| <= ∫ D dm.
+            Ndf::Gtr(g) => g.total_mass(),
+            Ndf::Ltmd(l) => l.projected_area_lipschitz(),
+        }
+    }
+
+    /// True when [`MicrofacetDistribution::projected_area`] is the projected area of `D` (false
+    /// for GTR with Dimov's Λ), so that a phase sample's `eval/pdf` is the flake's reflectance.
+    pub fn lambda_is_projected_area(&self) -> bool {
+        match self {
+            Ndf::Gtr(g) | Ndf::Ltmd(Ltmd { base: LtmdBase::Gtr(g), .. }) => g.lambda == GtrLambda::Exact,
+            _ => true,
         }
     }
 
@@ -150,6 +224,8 @@ impl Ndf {
             Ndf::Beckmann(b) => b.alpha_u == b.alpha_v,
             Ndf::Ggx(g) => g.alpha_u == g.alpha_v,
             Ndf::Gpss(g) => g.alpha_x == g.alpha_y,
+            Ndf::Gtr(_) => true,
+            Ndf::Ltmd(l) => l.is_isotropic(),
         }
     }
 }

@@ -370,6 +370,6 @@ fn bad_gamma_and_singular_transforms_are_errors_naming_the_parameter() {
     }
     let base = LtmdBase::Ggx(Ggx::new(0.3, 0.3).unwrap());
     let singular = glam::DMat2::from_cols(glam::DVec2::new(1.0, 2.0), glam::DVec2::new(2.0, 4.0));
-    assert!(Ltmd::new(base, singular).unwrap_err().message.contains("\"transform\""));
+    assert!(Ltmd::new(base, singular).unwrap_err().message.contains("\"transform_xx\""));
     assert!(Ltmd::stretch(base, 1.0).unwrap_err().message.contains("\"stretch\""));
 }

@@ -97,7 +97,10 @@ impl Ltmd {
         if !entries.iter().all(|x| x.is_finite()) || !(det.abs() > 1e-12 * scale * scale) {
             return Err(Error::new(
                 ErrorKind::InvalidValue,
-                format!("parameter \"transform\" must be a finite invertible 2x2 matrix, got {entries:?} (column-major, determinant {det})"),
+                format!(
+                    "the microsurface transform (\"transform_xx\", \"transform_xy\", \"transform_yx\", \"transform_yy\") must be a finite invertible matrix, got xx = {}, xy = {}, yx = {}, yy = {} (determinant {det})",
+                    entries[0], entries[2], entries[1], entries[3]
+                ),
             ));
         }
         Ok(Ltmd { base, transform, inverse: transform.inverse(), abs_det: det.abs() })
@@ -106,11 +109,16 @@ impl Ltmd {
     /// The stretch `M_s` of Eq. 31, `s ∈ (−1, 1)`: `diag(1/(1 − s), 1 − s)` for `s >= 0`,
     /// `diag(1 + s, 1/(1 + s))` below; `det M_s = 1`.
     pub fn stretch(base: LtmdBase, s: f64) -> Result<Ltmd> {
+        Ltmd::new(base, Ltmd::stretch_matrix(s)?)
+    }
+
+    /// `M_s` of Eq. 31.
+    pub fn stretch_matrix(s: f64) -> Result<DMat2> {
         if !(s > -1.0 && s < 1.0) {
             return Err(Error::new(ErrorKind::InvalidValue, format!("parameter \"stretch\" must lie in (-1, 1), got {s}")));
         }
         let diag = if s >= 0.0 { DVec2::new(1.0 / (1.0 - s), 1.0 - s) } else { DVec2::new(1.0 + s, 1.0 / (1.0 + s)) };
-        Ltmd::new(base, DMat2::from_diagonal(diag))
+        Ok(DMat2::from_diagonal(diag))
     }
 
     /// Classic anisotropy from an isotropic base of roughness `alpha` (Eq. 29):

@@ -131,12 +131,12 @@ fn invalid(message: String) -> FfiError {
     Error::new(ErrorKind::InvalidArgument, message).into()
 }
 
-fn frame(f: &mf_frame) -> FfiResult<Frame> {
+pub(super) fn frame(f: &mf_frame) -> FfiResult<Frame> {
     Ok(Frame::from_normal_tangent(f.normal.into(), f.tangent.into())?)
 }
 
 /// A world-space unit direction, in the local frame.
-fn local_direction(frame: &Frame, name: &str, v: mf_vec3) -> FfiResult<DVec3> {
+pub(super) fn local_direction(frame: &Frame, name: &str, v: mf_vec3) -> FfiResult<DVec3> {
     Ok(frame.to_local(check_direction(name, v.into())?))
 }
 
@@ -157,7 +157,7 @@ fn length(name: &str, t: f64) -> FfiResult<f64> {
     }
 }
 
-fn uniform(name: impl std::fmt::Display, u: f64) -> FfiResult<f64> {
+pub(super) fn uniform(name: impl std::fmt::Display, u: f64) -> FfiResult<f64> {
     if (0.0..1.0).contains(&u) {
         Ok(u)
     } else {

@@ -17,12 +17,14 @@
 
 mod gpis;
 mod medium;
+mod ndf;
 mod params;
 mod surface;
 mod track;
 
 pub use gpis::*;
 pub use medium::*;
+pub use ndf::*;
 pub use params::*;
 pub use surface::*;
 pub use track::*;

@@ -44,10 +44,10 @@ use std::f64::consts::PI;
 
 /// The largest tail exponent: the exact Λ uses GTR_4 as its mixture base above 2, and Dimov's
 /// closed forms stop at 4 (seeds/001 Appendix A).
-pub const MAX_GAMMA: f64 = 4.0;
+const MAX_GAMMA: f64 = 4.0;
 
 /// Gauss–Jacobi nodes of the exact projected-area mixture (see the module notes).
-pub const MIXTURE_NODES: usize = 20;
+const MIXTURE_NODES: usize = 20;
 
 /// Rejection tries before a visible-normal sample gives up (`None`). The acceptance rate is at
 /// least ~1/16 for every direction (envelope within 4× of the mixing density, bound of the

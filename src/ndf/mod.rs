@@ -24,7 +24,7 @@ mod normal_mixture;
 pub use beckmann::Beckmann;
 pub use ggx::Ggx;
 pub use gpss::Gpss;
-pub use gtr::{Gtr, GtrLambda, MAX_GAMMA};
+pub use gtr::{Gtr, GtrLambda};
 pub use ltmd::{Ltmd, LtmdBase};
 pub use mixture::BeckmannUniformMixture;
 pub use normal_mixture::NormalUniformMixture;

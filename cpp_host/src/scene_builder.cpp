@@ -776,8 +776,8 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
               macrofacet (as the interior of its mean-surface shape; parameters as in the
               C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
-              lengthscale*, micro_bsdf, material | eta,k, specular_reflectance,
-              reflectance, vndf_sampling, mixture_ratio)
+              lengthscale*, gamma, lambda, stretch | transform_*, micro_bsdf, material |
+              eta,k, specular_reflectance, reflectance, vndf_sampling, mixture_ratio)
               gpis (realization-based ground truth; as the interior of its mean-surface
               shape; the macrofacet names that apply: sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,

@@ -220,13 +220,15 @@ fn gtr_exact_lambda_matches_quadrature_of_its_d() {
             let quadrature = isotropic_projected_area(&d, theta);
             let closed = gtr.projected_area(w);
             let err = (closed - quadrature).abs() / quadrature.max(1e-300);
-            worst = worst.max(err);
+            if quadrature > 1e-12 {
+                worst = worst.max(err);
+            }
             // Relative 1e-9 (the mixture quadrature is at ~1e-12 for α >= 0.05; α = 0.01 with
             // its two scales 1e-4 apart in β² is the hardest case).
             assert!(err < 1e-9 || (closed - quadrature).abs() < 1e-15, "gtr(α={alpha}, γ={gamma}) θ={theta}: closed {closed}, quadrature {quadrature}");
         }
     }
-    println!("worst relative error of the exact GTR projected area: {worst:.2e}");
+    println!("worst relative error of the exact GTR projected area (areas > 1e-12): {worst:.2e}");
 }
 
 #[test]

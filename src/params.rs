@@ -297,7 +297,8 @@ pub fn ndf_from_params(params: &ParamSet) -> Result<Ndf> {
 fn read_ndf(r: &Reader, sigma: Option<f64>, default: &str) -> Result<(Ndf, f64)> {
     let distribution = r.string("distribution")?.unwrap_or(default);
     let choices = if sigma.is_some() { "\"beckmann\", \"ggx\", \"gtr\", \"gpss\"" } else { "\"beckmann\", \"ggx\", \"gtr\"" };
-    if !matches!(distribution, "beckmann" | "ggx" | "gtr") && !(distribution == "gpss" && sigma.is_some()) {
+    let supported = matches!(distribution, "beckmann" | "ggx" | "gtr") || (distribution == "gpss" && sigma.is_some());
+    if !supported {
         return Err(invalid_choice("distribution", distribution, choices));
     }
     if distribution != "gtr" && (r.has("gamma") || r.has("lambda")) {

@@ -22,6 +22,9 @@ use glam::{DMat2, DVec2, DVec3};
 
 /// The distributions a transform applies to: the height fields (their `D` vanishes below the
 /// horizon, so `M^{−T}` keeps every normal in its hemisphere).
+// GTR's inline Gauss–Jacobi mixture makes its variant large; distributions stay `Copy` values
+// (the tracker's bounds copy them), so it is not boxed.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LtmdBase {
     Beckmann(Beckmann),
@@ -128,26 +131,26 @@ impl Ltmd {
     }
 
     /// `M^T m` (normals of the transformed surface to normals of the base).
-    fn to_base_normal(&self, m: DVec3) -> DVec3 {
+    fn base_normal_of(&self, m: DVec3) -> DVec3 {
         let t = self.transform.transpose() * DVec2::new(m.x, m.y);
         DVec3::new(t.x, t.y, m.z)
     }
 
     /// `M^{−1} v` (directions of the transformed surface to directions of the base).
-    fn to_base_direction(&self, v: DVec3) -> DVec3 {
+    fn base_direction_of(&self, v: DVec3) -> DVec3 {
         let t = self.inverse * DVec2::new(v.x, v.y);
         DVec3::new(t.x, t.y, v.z)
     }
 
     /// `M^{−T} u` (base normals to normals of the transformed surface).
-    fn from_base_normal(&self, u: DVec3) -> DVec3 {
+    fn normal_from_base(&self, u: DVec3) -> DVec3 {
         let t = self.inverse.transpose() * DVec2::new(u.x, u.y);
         DVec3::new(t.x, t.y, u.z)
     }
 
     /// `A_M(v) = |M^{−1} v| · A(M^{−1} v / |M^{−1} v|)` for the base area `area`.
     fn transformed_area(&self, v: DVec3, area: impl Fn(DVec3) -> f64) -> f64 {
-        let w = self.to_base_direction(v);
+        let w = self.base_direction_of(v);
         let len = w.length();
         if len == 0.0 {
             return 0.0;
@@ -196,7 +199,7 @@ impl MicrofacetDistribution for Ltmd {
         if m.z <= 0.0 {
             return 0.0;
         }
-        let u = self.to_base_normal(m);
+        let u = self.base_normal_of(m);
         let len2 = u.length_squared();
         self.abs_det / (len2 * len2) * self.base.ndf().d(u / len2.sqrt())
     }
@@ -212,9 +215,9 @@ impl MicrofacetDistribution for Ltmd {
 
     /// Eq. 28 through the transform.
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
-        let w = self.to_base_direction(wi).try_normalize()?;
+        let w = self.base_direction_of(wi).try_normalize()?;
         let u_base = self.base.ndf().sample_visible(w, u)?;
-        let m = self.from_base_normal(u_base).try_normalize()?;
+        let m = self.normal_from_base(u_base).try_normalize()?;
         // Rounding can leave a grazing sample a hair behind the visibility plane.
         (wi.dot(m) > 0.0).then_some(m)
     }
@@ -222,6 +225,6 @@ impl MicrofacetDistribution for Ltmd {
     /// Eqs. 25–26.
     fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
         let u_base = self.base.ndf().sample_normal(u)?;
-        self.from_base_normal(u_base).try_normalize()
+        self.normal_from_base(u_base).try_normalize()
     }
 }

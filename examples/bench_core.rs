@@ -7,7 +7,7 @@
 //! passes over the same inputs (to discount start-up noise on a shared machine).
 
 use glam::DVec3;
-use macrofacet::ndf::{Beckmann, Ggx, Gpss, MicrofacetDistribution, Ndf};
+use macrofacet::ndf::{Beckmann, Ggx, Gpss, Gtr, GtrLambda, Ltmd, LtmdBase, MicrofacetDistribution, Ndf};
 use macrofacet::stats::Pcg32;
 use macrofacet::{medium_from_params, ParamSet, PHASE_SAMPLE_DIMENSIONS};
 use std::hint::black_box;
@@ -56,7 +56,14 @@ fn main() {
         ("beckmann", Ndf::Beckmann(Beckmann::new(0.3, 0.5).unwrap())),
         ("ggx", Ndf::Ggx(Ggx::new(0.3, 0.5).unwrap())),
         ("gpss", Ndf::Gpss(Gpss::new(0.5, 0.5, 0.5).unwrap())),
+        ("gtr γ=1.7", Ndf::Gtr(Gtr::new(0.3, 1.7, GtrLambda::Exact).unwrap())),
+        ("gtr γ=1.7 dimov Λ", Ndf::Gtr(Gtr::new(0.3, 1.7, GtrLambda::Dimov).unwrap())),
+        ("gtr γ=3", Ndf::Gtr(Gtr::new(0.3, 3.0, GtrLambda::Exact).unwrap())),
+        ("gtr γ=1.7 skewed (ltmd)", Ndf::Ltmd(Ltmd::new(LtmdBase::Gtr(Gtr::new(0.3, 1.7, GtrLambda::Exact).unwrap()),
+            glam::DMat2::from_cols(glam::DVec2::new(1.0, 0.0), glam::DVec2::new(2.0, 1.0))).unwrap())),
+        ("ggx stretched (ltmd)", Ndf::Ltmd(Ltmd::stretch(LtmdBase::Ggx(Ggx::new(0.3, 0.3).unwrap()), 0.5).unwrap())),
     ];
+    time("construction: gtr γ=1.7 (Gauss–Jacobi nodes)", |i| Gtr::new(0.3, 1.5 + 0.4 * us[i][0], GtrLambda::Exact).unwrap().alpha);
     for (name, ndf) in ndfs {
         time(&format!("{name}: D(m)"), |i| ndf.d(dirs[i]));
         time(&format!("{name}: projected_area(w)"), |i| ndf.projected_area(dirs[i]));
@@ -78,6 +85,16 @@ fn main() {
     });
     time("gpss Au phase: eval(wi, wo)", |i| medium.phase.eval(dirs[i], dirs[(i + 1) % N])[0]);
     time("gpss Au phase: sample(wi, u)", |i| medium.phase.sample(dirs[i], us[i]).map_or(0.0, |s| s.pdf));
+
+    let mut p = ParamSet::new();
+    p.set_float("sigma", 1.0).set_float("alpha", 0.3).set_float("gamma", 1.7).set_string("distribution", "gtr").set_string("material", "Ag");
+    let gtr = medium_from_params(&p).unwrap();
+    time("gtr 1.7 medium: sample_free_flight", |i| match gtr.sample_free_flight(fs[i], dirs[i], f64::INFINITY, us[i][0]) {
+        macrofacet::FreeFlight::Scatter { t } => t,
+        macrofacet::FreeFlight::Pass => 0.0,
+    });
+    time("gtr 1.7 Ag phase: sample(wi, u)", |i| gtr.phase.sample(dirs[i], us[i]).map_or(0.0, |s| s.pdf));
+    println!("size of an Ndf: {} bytes, of a medium: {} bytes", std::mem::size_of::<Ndf>(), std::mem::size_of::<macrofacet::MacrofacetMedium>());
 
     bench_closest();
     println!("\n== tracking (library tracker, per call)");

@@ -63,6 +63,11 @@
 #define MF_PHASE_SAMPLE_DIMENSIONS 5
 
 /**
+ * Uniform numbers consumed by [`mf_ndf_sample_visible`].
+ */
+#define MF_NDF_SAMPLE_DIMENSIONS 3
+
+/**
  * [`mf_surface_callbacks::shape`]: no known curvature; without a bound callback the tracker
  * uses the Lipschitz bound `|f(p + s d) − f(p)| <= s` (correct, slower).
  */
@@ -147,6 +152,11 @@ typedef struct mf_gpis mf_gpis;
  * An immutable macrofacet medium. Safe to share between threads.
  */
 typedef struct mf_medium mf_medium;
+
+/**
+ * An immutable microfacet distribution. Safe to share between threads.
+ */
+typedef struct mf_ndf mf_ndf;
 
 /**
  * An ordered set of named parameters (see the README for the names a medium takes).
@@ -406,6 +416,23 @@ typedef struct mf_phase_sample_query {
   struct mf_vec3 wi;
   double u[MF_PHASE_SAMPLE_DIMENSIONS];
 } mf_phase_sample_query;
+
+/**
+ * A sampled visible normal. `valid` is false when no microfacet is visible from `wi` (then the
+ * other fields are zero).
+ */
+typedef struct mf_ndf_sample {
+  /**
+   * The microfacet normal, world space.
+   */
+  struct mf_vec3 m;
+  /**
+   * Its density per solid angle, `D_wi(m) = <wi, m> D(m) / ((1 + Λ(wi)) cos θ_wi)` with the
+   * exact projected area of `D` (Eq. 27 of seeds/001).
+   */
+  double pdf;
+  bool valid;
+} mf_ndf_sample;
 
 /**
  * The host's mean surface at `p` (world space): writes `*out` and returns 0, or returns any
@@ -896,6 +923,74 @@ enum mf_status mf_phase_sample_batch(const struct mf_medium *medium,
                                      const struct mf_phase_sample_query *queries,
                                      size_t count,
                                      struct mf_phase_sample_result *out_samples);
+
+/**
+ * Creates a distribution from named parameters: `distribution` (`beckmann`, `ggx` or `gtr`;
+ * default `beckmann`), `alpha` or `alpha_u`/`alpha_v`, `gamma` and `lambda` for `gtr`,
+ * `stretch` or `transform_xx`/`_xy`/`_yx`/`_yy`. Other names are errors. On failure nothing is
+ * written and [`super::mf_last_error_message`] names the parameter.
+ *
+ * # Safety
+ * `params` must be a live handle (or NULL); `out_ndf` NULL or valid for writes.
+ */
+enum mf_status mf_ndf_new(const struct mf_params *params, struct mf_ndf **out_ndf);
+
+/**
+ * Releases a distribution; NULL is a no-op.
+ *
+ * # Safety
+ * `ndf` must be NULL or a pointer from [`mf_ndf_new`] not yet freed.
+ */
+void mf_ndf_free(struct mf_ndf *ndf);
+
+/**
+ * `D(m)` per steradian (normalised by `∫ D(m)(m·n) dm = 1`); 0 below the horizon.
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_ndf_eval(const struct mf_ndf *ndf,
+                           const struct mf_frame *frame_,
+                           struct mf_vec3 m,
+                           double *out_d);
+
+/**
+ * Smith's `Λ(w)` extended to the whole sphere (`Λ(−w) = −1 − Λ(w)`); `+inf` on the horizon
+ * seen from above, `-inf` from below. Height-correlated masking-shadowing is
+ * `1 / (1 + Λ(wi) + Λ(wo))`, `G1(w) = 1 / (1 + Λ(w))`.
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_ndf_lambda(const struct mf_ndf *ndf,
+                             const struct mf_frame *frame_,
+                             struct mf_vec3 w,
+                             double *out_lambda);
+
+/**
+ * Samples a visible normal from `wi` with [`MF_NDF_SAMPLE_DIMENSIONS`] uniform numbers in
+ * `[0, 1)` read from `u` (exact sampling of `<wi, m> D(m)` for every distribution).
+ *
+ * # Safety
+ * Pointers must be NULL or valid; `u` must hold `MF_NDF_SAMPLE_DIMENSIONS` doubles.
+ */
+enum mf_status mf_ndf_sample_visible(const struct mf_ndf *ndf,
+                                     const struct mf_frame *frame_,
+                                     struct mf_vec3 wi,
+                                     const double *u,
+                                     struct mf_ndf_sample *out_sample);
+
+/**
+ * The density of [`mf_ndf_sample_visible`] at `m` (per solid angle of `m`).
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_ndf_pdf_visible(const struct mf_ndf *ndf,
+                                  const struct mf_frame *frame_,
+                                  struct mf_vec3 wi,
+                                  struct mf_vec3 m,
+                                  double *out_pdf);
 
 /**
  * Creates an empty parameter set in `*out`; release it with [`mf_params_free`].

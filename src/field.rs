@@ -13,11 +13,11 @@
 use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::frame::Frame;
 use crate::height::HeightProfile;
-use crate::ndf::{Beckmann, Ggx, Gpss, GpssMatrix, Ndf};
+use crate::ndf::{Beckmann, Ggx, Gpss, GpssMatrix, Ltmd, LtmdBase, Ndf};
 use crate::phase::MicroBsdf;
 use crate::surface::SurfacePoint;
 use crate::{MacrofacetMedium, Rgb};
-use glam::{DMat3, DVec3};
+use glam::{DMat2, DMat3, DVec2, DVec3};
 
 /// What varies at one point; `None` keeps the medium's own value.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -154,6 +154,12 @@ impl MacrofacetMedium {
                 Ndf::Beckmann(_) => Ndf::Beckmann(Beckmann::new(a.x, a.y)?),
                 Ndf::Ggx(_) => Ndf::Ggx(Ggx::new(a.x, a.y)?),
                 Ndf::Gpss(_) | Ndf::GpssMatrix(_) => Ndf::Gpss(Gpss::new(a.x, a.y, a.z)?),
+                // GTR depends on the slopes over α: roughness (a_u, a_v) is the stretch
+                // diag(a_u, a_v)/α of the medium's GTR (seeds/001 Eqs. 22, 29).
+                Ndf::Gtr(g) => Ndf::Ltmd(Ltmd::new(LtmdBase::Gtr(g), DMat2::from_diagonal(DVec2::new(a.x, a.y) / g.alpha))?),
+                Ndf::Ltmd(_) => {
+                    return Err(Error::new(ErrorKind::InvalidArgument, "a spatially varying roughness applies to beckmann, ggx, gtr and gpss media, not to a transformed distribution"))
+                }
             };
         }
         if let Some(scale) = local.reflectance_scale {
@@ -183,6 +189,13 @@ impl MacrofacetMedium {
             Ndf::Beckmann(_) => Ndf::Beckmann(Beckmann { alpha_u: alpha, alpha_v: alpha }),
             Ndf::Ggx(_) => Ndf::Ggx(Ggx { alpha_u: alpha, alpha_v: alpha }),
             Ndf::Gpss(_) | Ndf::GpssMatrix(_) => Ndf::Gpss(Gpss { alpha_x: alpha, alpha_y: alpha, alpha_z: alpha }),
+            // (a zero roughness bound is kept a hair above zero: M must stay invertible)
+            Ndf::Gtr(g) => match Ltmd::new(LtmdBase::Gtr(g), DMat2::from_diagonal(DVec2::splat((alpha / g.alpha).max(1e-150)))) {
+                Ok(l) => Ndf::Ltmd(l),
+                Err(_) => Ndf::Gtr(g),
+            },
+            // (localized refuses a varying roughness for transformed distributions)
+            Ndf::Ltmd(l) => Ndf::Ltmd(l),
         }
     }
 }

@@ -6,7 +6,11 @@
 //! |---|---|---|
 //! | `sigma` / `variance` | float | height standard deviation σ (scene units) or σ²; exactly one |
 //! | `shell_extent` | float | k: the shell's top face at `+kσ` (3) |
-//! | `distribution` | string | `beckmann`, `ggx` or `gpss` (`gpss`) |
+//! | `distribution` | string | `beckmann`, `ggx`, `gtr` or `gpss` (`gpss`) |
+//! | `gamma` | float | `gtr` only, required: tail exponent in (0, 4]; 1 = Berry, 2 = GGX (seeds/001 Eq. 32) |
+//! | `lambda` | string | `gtr` only: `exact` (the projected area of `D`) or `dimov` (seeds/001 Eqs. 34–39) (`exact`) |
+//! | `stretch` | float | height fields: the stretch `s ∈ (−1, 1)` of seeds/001 Eq. 31 |
+//! | `transform_xx/_xy/_yx/_yy` | float | height fields: the tangent-plane matrix `M` of seeds/001 Eq. 9 (`a c; b d` = `xx xy; yx yy`), all four |
 //! | `alpha` | float | isotropic roughness; for `gpss` also `alpha_z` (an isotropic kernel) |
 //! | `alpha_u`, `alpha_v` | float | anisotropic roughness along the tangent / bitangent |
 //! | `alpha_z` | float | `gpss` only: roughness along the normal, `0` = height field |
@@ -16,15 +20,15 @@
 //! | `eta`, `k` | rgb | conductor index, instead of `material` |
 //! | `specular_reflectance` | rgb | scale of the conductor reflectance, in [0, 1] (1) |
 //! | `reflectance` | rgb | diffuse flake albedo, in [0, 1] (0.5) |
-//! | `vndf_sampling` | string | `exact` or `mixture` (Eq. 40; `gpss` with conductor flakes) (`exact`) |
-//! | `mixture_ratio` | float | R of Eq. 40, in (0, 1) (0.5) |
+//! | `vndf_sampling` | string | `exact` or `mixture` (conductor flakes: Eq. 40 for `gpss`, seeds/001 App. B for height fields) (`exact`) |
+//! | `mixture_ratio` | float | R of the mixture, in (0, 1) (0.5 for Eq. 40; `1 − α/2` within [0.5, 0.95] for App. B) |
 
 use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
 use crate::gpis::{GpisSurface, MarchSettings, Memory, SeKernel};
 use crate::height::{HeightProfile, DEFAULT_SHELL_EXTENT};
 use crate::medium::MacrofacetMedium;
-use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Ndf};
+use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Gtr, GtrLambda, Ltmd, LtmdBase, Ndf, NormalUniformMixture};
 use crate::phase::{MacrofacetPhase, MicroBsdf, VndfSampling};
 use crate::Rgb;
 use std::cell::RefCell;
@@ -194,14 +198,7 @@ pub fn medium_from_params(params: &ParamSet) -> Result<MacrofacetMedium> {
     let height = HeightProfile::new(sigma, shell_extent)
         .map_err(|e| Error::new(e.kind, e.message))?;
 
-    let distribution = r.string("distribution")?.unwrap_or("gpss");
-    let alphas = read_roughness(&r, sigma, distribution == "gpss")?;
-    let ndf = match distribution {
-        "beckmann" => Ndf::Beckmann(Beckmann::new(alphas[0], alphas[1])?),
-        "ggx" => Ndf::Ggx(Ggx::new(alphas[0], alphas[1])?),
-        "gpss" => Ndf::Gpss(Gpss::new(alphas[0], alphas[1], alphas[2])?),
-        other => return Err(invalid_choice("distribution", other, "\"beckmann\", \"ggx\", \"gpss\"")),
-    };
+    let (ndf, alpha_mean) = read_ndf(&r, Some(sigma), "gpss")?;
 
     let micro_bsdf = match r.string("micro_bsdf")?.unwrap_or("conductor") {
         "conductor" => read_conductor(&r)?,
@@ -212,16 +209,22 @@ pub fn medium_from_params(params: &ParamSet) -> Result<MacrofacetMedium> {
     let sampling = match r.string("vndf_sampling")?.unwrap_or("exact") {
         "exact" => VndfSampling::Exact,
         "mixture" => {
-            let Ndf::Gpss(gpss) = ndf else {
-                return Err(Error::new(ErrorKind::InvalidValue,
-                    "vndf_sampling \"mixture\" (Eq. 40) applies to distribution \"gpss\" only"));
-            };
             if matches!(micro_bsdf, MicroBsdf::Diffuse { .. }) {
                 return Err(Error::new(ErrorKind::InvalidValue,
                     "vndf_sampling \"mixture\" applies to conductor flakes only"));
             }
-            let ratio = r.float("mixture_ratio")?.unwrap_or(0.5);
-            VndfSampling::Mixture(BeckmannUniformMixture::new(gpss, ratio)?)
+            match ndf {
+                // seeds/000 Eq. 40 for the generalized NDF.
+                Ndf::Gpss(gpss) => {
+                    let ratio = r.float("mixture_ratio")?.unwrap_or(0.5);
+                    VndfSampling::Mixture(BeckmannUniformMixture::new(gpss, ratio)?)
+                }
+                // seeds/001 Appendix B for the height fields.
+                _ => {
+                    let ratio = r.float("mixture_ratio")?.unwrap_or(NormalUniformMixture::default_ratio(alpha_mean));
+                    VndfSampling::NormalMixture(NormalUniformMixture::new(ratio)?)
+                }
+            }
         }
         other => return Err(invalid_choice("vndf_sampling", other, "\"exact\", \"mixture\"")),
     };
@@ -274,6 +277,108 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
     };
     r.finish()?;
     Ok(GpisSurface { kernel, memory, settings, micro_bsdf })
+}
+
+/// A height-field microfacet distribution from named parameters, for a surface BSDF (a host's
+/// `roughconductor`): `distribution` (`beckmann`, `ggx` or `gtr`; default `beckmann` as in
+/// Mitsuba 3), `alpha` or `alpha_u`/`alpha_v`, `gamma` and `lambda` (GTR), `stretch` or
+/// `transform_*`. Other names are errors.
+pub fn ndf_from_params(params: &ParamSet) -> Result<Ndf> {
+    let r = Reader::new(params);
+    let (ndf, _) = read_ndf(&r, None, "beckmann")?;
+    r.finish()?;
+    Ok(ndf)
+}
+
+/// The distribution and its mean tangential roughness `sqrt(α_u α_v)`. `sigma` is `None` for a
+/// surface (no kernel form, no `gpss`). Parameters are read here so that a per-query `gamma` or
+/// `M` (textures) needs only another call of the constructors below, which are cheap except for
+/// GTR's Gauss–Jacobi nodes (O(20²) work).
+fn read_ndf(r: &Reader, sigma: Option<f64>, default: &str) -> Result<(Ndf, f64)> {
+    let distribution = r.string("distribution")?.unwrap_or(default);
+    let choices = if sigma.is_some() { "\"beckmann\", \"ggx\", \"gtr\", \"gpss\"" } else { "\"beckmann\", \"ggx\", \"gtr\"" };
+    let supported = matches!(distribution, "beckmann" | "ggx" | "gtr") || (distribution == "gpss" && sigma.is_some());
+    if !supported {
+        return Err(invalid_choice("distribution", distribution, choices));
+    }
+    if distribution != "gtr" && (r.has("gamma") || r.has("lambda")) {
+        return Err(Error::new(ErrorKind::UnknownParameter, "\"gamma\" / \"lambda\" apply to distribution \"gtr\" only"));
+    }
+    let alphas = match sigma {
+        Some(sigma) => read_roughness(r, sigma, distribution == "gpss")?,
+        None => {
+            if let Some(name) = ["lengthscale", "lengthscale_x", "lengthscale_y", "lengthscale_z"].into_iter().find(|n| r.has(n)) {
+                return Err(Error::new(ErrorKind::UnknownParameter,
+                    format!("\"{name}\" needs \"sigma\" (a medium); a surface takes \"alpha\" or \"alpha_u\"/\"alpha_v\"")));
+            }
+            read_roughness(r, f64::NAN, false)?
+        }
+    };
+    let alpha_mean = (alphas[0] * alphas[1]).sqrt();
+    let transform = read_transform(r)?;
+    if distribution == "gpss" {
+        if transform.is_some() {
+            return Err(Error::new(ErrorKind::UnknownParameter,
+                "a microsurface transform (\"stretch\", \"transform_*\") applies to the height fields \"beckmann\", \"ggx\", \"gtr\" only"));
+        }
+        return Ok((Ndf::Gpss(Gpss::new(alphas[0], alphas[1], alphas[2])?), alpha_mean));
+    }
+    // GTR is shape-variant: its anisotropy is the transform diag(α/α_u, α/α_v) of the isotropic
+    // GTR with α = sqrt(α_u α_v) (seeds/001 Eq. 29, area preserving); a user transform acts
+    // after it (normals map by (M_user M_aniso)^{-T}).
+    let (base, anisotropy) = match distribution {
+        "beckmann" => (LtmdBase::Beckmann(Beckmann::new(alphas[0], alphas[1])?), None),
+        "ggx" => (LtmdBase::Ggx(Ggx::new(alphas[0], alphas[1])?), None),
+        _ => {
+            let gamma = r.float("gamma")?.ok_or_else(|| {
+                missing("distribution \"gtr\" needs \"gamma\", the tail exponent in (0, 4] (1 = Berry, 2 = GGX)".into())
+            })?;
+            let lambda = match r.string("lambda")?.unwrap_or("exact") {
+                "exact" => GtrLambda::Exact,
+                "dimov" => GtrLambda::Dimov,
+                other => return Err(invalid_choice("lambda", other, "\"exact\", \"dimov\"")),
+            };
+            let gtr = Gtr::new(alpha_mean, gamma, lambda)?;
+            let anisotropy = (alphas[0] != alphas[1])
+                .then(|| glam::DMat2::from_diagonal(glam::DVec2::new(alpha_mean / alphas[0], alpha_mean / alphas[1])));
+            (LtmdBase::Gtr(gtr), anisotropy)
+        }
+    };
+    let matrix = match (transform, anisotropy) {
+        (None, None) => {
+            let ndf = match base {
+                LtmdBase::Beckmann(b) => Ndf::Beckmann(b),
+                LtmdBase::Ggx(g) => Ndf::Ggx(g),
+                LtmdBase::Gtr(g) => Ndf::Gtr(g),
+            };
+            return Ok((ndf, alpha_mean));
+        }
+        (Some(m), None) | (None, Some(m)) => m,
+        (Some(user), Some(aniso)) => user * aniso,
+    };
+    Ok((Ndf::Ltmd(Ltmd::new(base, matrix)?), alpha_mean))
+}
+
+/// The microsurface transform: `stretch` (Eq. 31) or the four `transform_*` entries of `M`
+/// (Eq. 9), or none.
+fn read_transform(r: &Reader) -> Result<Option<glam::DMat2>> {
+    const NAMES: [&str; 4] = ["transform_xx", "transform_xy", "transform_yx", "transform_yy"];
+    let stretch = r.float("stretch")?;
+    let entries = [r.float(NAMES[0])?, r.float(NAMES[1])?, r.float(NAMES[2])?, r.float(NAMES[3])?];
+    let given = entries.iter().filter(|e| e.is_some()).count();
+    match (stretch, given) {
+        (None, 0) => Ok(None),
+        (Some(s), 0) => Ltmd::stretch_matrix(s).map(Some),
+        (None, 4) => {
+            let [xx, xy, yx, yy] = entries.map(|e| e.unwrap_or(0.0));
+            Ok(Some(glam::DMat2::from_cols(glam::DVec2::new(xx, yx), glam::DVec2::new(xy, yy))))
+        }
+        (None, _) => {
+            let absent: Vec<&str> = NAMES.iter().zip(&entries).filter(|(_, e)| e.is_none()).map(|(n, _)| *n).collect();
+            Err(missing(format!("a microsurface transform needs all four of \"transform_xx\", \"transform_xy\", \"transform_yx\", \"transform_yy\"; missing {absent:?}")))
+        }
+        (Some(_), _) => Err(missing("give either \"stretch\" or the \"transform_*\" matrix, not both".into())),
+    }
 }
 
 /// `sigma` from `sigma` or `variance` (exactly one).

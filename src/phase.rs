@@ -11,7 +11,7 @@
 //! not event by event.
 
 use crate::error::{Error, ErrorKind, Result};
-use crate::ndf::{BeckmannUniformMixture, MicrofacetDistribution, Ndf};
+use crate::ndf::{BeckmannUniformMixture, MicrofacetDistribution, Ndf, NormalUniformMixture};
 use crate::fresnel::fresnel_conductor_rgb;
 use crate::Rgb;
 use glam::DVec3;
@@ -76,6 +76,8 @@ pub enum VndfSampling {
     Exact,
     /// The Beckmann + uniform-hemisphere mixture of Eq. 40 (generalized NDF, specular flakes).
     Mixture(BeckmannUniformMixture),
+    /// `D(m)(m·n)` + uniform-hemisphere mixture of seeds/001 Appendix B (height fields).
+    NormalMixture(NormalUniformMixture),
 }
 
 /// A sampled scattering direction.
@@ -162,6 +164,7 @@ impl MacrofacetPhase {
                 let m = match self.sampling {
                     VndfSampling::Exact => self.ndf.sample_visible(wi, u_normal)?,
                     VndfSampling::Mixture(mix) => mix.sample(wi, u_normal)?,
+                    VndfSampling::NormalMixture(mix) => mix.sample(&self.ndf, wi, u_normal)?,
                 };
                 let cos = wi.dot(m);
                 if cos <= 0.0 {
@@ -174,8 +177,13 @@ impl MacrofacetPhase {
                     return None;
                 }
                 let weight = match self.sampling {
-                    VndfSampling::Exact => f,
-                    VndfSampling::Mixture(_) => {
+                    // eval/pdf = F · sampling_area/area: F itself unless Λ is a model.
+                    VndfSampling::Exact if self.ndf.lambda_is_projected_area() => f,
+                    VndfSampling::Exact => {
+                        let ratio = self.ndf.sampling_projected_area(wi) / self.ndf.projected_area(wi);
+                        f.map(|x| x * ratio)
+                    }
+                    VndfSampling::Mixture(_) | VndfSampling::NormalMixture(_) => {
                         let value = self.ndf.d(m) / (4.0 * self.ndf.projected_area(wi));
                         f.map(|x| x * value / pdf)
                     }
@@ -190,6 +198,7 @@ impl MacrofacetPhase {
         match self.sampling {
             VndfSampling::Exact => self.ndf.pdf_visible(wi, m),
             VndfSampling::Mixture(mix) => mix.pdf(wi, m),
+            VndfSampling::NormalMixture(mix) => mix.pdf(&self.ndf, wi, m),
         }
     }
 

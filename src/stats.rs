@@ -274,8 +274,9 @@ pub struct Chi2Outcome {
     /// Samples that were NaN, infinite or (for directions) not of unit length; they are left
     /// out of the histogram and make [`Chi2Outcome::passes`] fail.
     pub invalid_samples: usize,
-    /// Observations that landed in cells whose expected count is exactly zero (e.g. a
-    /// direction where the pdf is zero, or a `None` when the pdf integrates to ≥ 1).
+    /// Observations that landed where the pdf is zero (for [`SphereChi2`]: a direction where
+    /// the pdf is zero, or a `None` when the pdf integrates to ≥ 1; elsewhere: cells of zero
+    /// expected count).
     pub zero_pdf_samples: usize,
     /// Integral of the pdf over the domain by the same quadrature that produced the expected
     /// counts (probability of the binned domain for [`chi2_1d`]; for [`chi2_counts`] the ratio
@@ -429,6 +430,9 @@ impl Default for SphereChi2 {
 const GL3_NODES: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
 const GL3_WEIGHTS: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
 
+/// Sub-cell refinement for cells with samples but no expected count ([`SphereChi2::run`]).
+const REFINED_QUADRATURE: usize = 16;
+
 /// Largest accepted `| |v| − 1 |` for a sampled direction.
 const UNIT_TOLERANCE: f64 = 1e-6;
 
@@ -456,41 +460,35 @@ impl SphereChi2 {
     pub fn integrate_cells(&self, pdf: impl Fn(DVec3) -> f64) -> Vec<f64> {
         assert!(self.theta_bins > 0 && self.phi_bins > 0, "SphereChi2 needs at least one cell");
         assert!(self.quadrature > 0, "SphereChi2 needs quadrature >= 1");
-        let q = self.quadrature;
+        (0..self.theta_bins * self.phi_bins).map(|cell| self.integrate_cell(cell, self.quadrature, &pdf)).collect()
+    }
+
+    /// `∫ pdf dω` over one cell with `q × q` sub-cells of 3×3 Gauss–Legendre nodes each (the
+    /// weights include the Jacobian of the `(cos θ, φ)` map).
+    fn integrate_cell(&self, cell: usize, q: usize, pdf: &impl Fn(DVec3) -> f64) -> f64 {
+        let (it, ip) = (cell / self.phi_bins, cell % self.phi_bins);
         let dz = 2.0 / (self.theta_bins * q) as f64;
         let dphi = 2.0 * PI / (self.phi_bins * q) as f64;
-        // Nodes along each axis, per sub-cell; weights include the Jacobian of the map.
-        let mut z_nodes = Vec::with_capacity(self.theta_bins * q * 3);
-        for s in 0..self.theta_bins * q {
-            let mid = -1.0 + (s as f64 + 0.5) * dz;
-            for k in 0..3 {
-                let z: f64 = mid + 0.5 * dz * GL3_NODES[k];
-                z_nodes.push((z, (1.0 - z * z).max(0.0).sqrt(), 0.5 * dz * GL3_WEIGHTS[k]));
-            }
-        }
-        let mut phi_nodes = Vec::with_capacity(self.phi_bins * q * 3);
-        for s in 0..self.phi_bins * q {
-            let mid = (s as f64 + 0.5) * dphi;
-            for k in 0..3 {
-                let phi: f64 = mid + 0.5 * dphi * GL3_NODES[k];
+        let nodes = |start: f64, width: f64| {
+            (0..q).flat_map(move |s| {
+                let mid = start + (s as f64 + 0.5) * width;
+                (0..3).map(move |k| (mid + 0.5 * width * GL3_NODES[k], 0.5 * width * GL3_WEIGHTS[k]))
+            })
+        };
+        let phis: Vec<(f64, f64, f64)> = nodes(ip as f64 * q as f64 * dphi, dphi)
+            .map(|(phi, w)| {
                 let (sin, cos) = phi.sin_cos();
-                phi_nodes.push((cos, sin, 0.5 * dphi * GL3_WEIGHTS[k]));
+                (cos, sin, w)
+            })
+            .collect();
+        let mut sum = 0.0;
+        for (z, wz) in nodes(-1.0 + it as f64 * q as f64 * dz, dz) {
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            for &(c, s, wp) in &phis {
+                sum += wz * wp * pdf(DVec3::new(r * c, r * s, z));
             }
         }
-        let per_side = 3 * q;
-        let mut cells = vec![0.0; self.theta_bins * self.phi_bins];
-        for it in 0..self.theta_bins {
-            for ip in 0..self.phi_bins {
-                let mut sum = 0.0;
-                for &(z, r, wz) in &z_nodes[it * per_side..(it + 1) * per_side] {
-                    for &(c, s, wp) in &phi_nodes[ip * per_side..(ip + 1) * per_side] {
-                        sum += wz * wp * pdf(DVec3::new(r * c, r * s, z));
-                    }
-                }
-                cells[it * self.phi_bins + ip] = sum;
-            }
-        }
-        cells
+        sum
     }
 
     /// Draw `self.samples` directions with `sample`, bin them, and test them against `pdf`
@@ -504,23 +502,43 @@ impl SphereChi2 {
         mut sample: impl FnMut(&mut Pcg32) -> Option<DVec3>,
         rng: &mut Pcg32,
     ) -> Chi2Outcome {
-        let integrals = self.integrate_cells(pdf);
+        let integrals = self.integrate_cells(&pdf);
         let pdf_integral: f64 = integrals.iter().sum();
         let n = self.samples as f64;
         let n_cells = integrals.len();
+        let (null_cell, zero_pdf_cell) = (n_cells, n_cells + 1);
         let mut expected: Vec<f64> = integrals.iter().map(|&p| p * n).collect();
-        expected.push(n * (1.0 - pdf_integral).max(0.0)); // null cell: sampler returned None
-        let mut observed = vec![0.0f64; n_cells + 1];
+        expected.push(n * (1.0 - pdf_integral).max(0.0)); // the sampler returned None
+        expected.push(0.0); // samples where the pdf itself is zero
+        let mut observed = vec![0.0f64; n_cells + 2];
+        let mut under_resolved = vec![false; n_cells];
         let mut invalid = 0usize;
         for _ in 0..self.samples {
             match sample(rng) {
-                None => observed[n_cells] += 1.0,
+                None => observed[null_cell] += 1.0,
                 Some(v) => match self.cell(v) {
+                    // A cell cut by a discontinuity of the pdf (a visibility great circle,
+                    // the horizon jump of GGX/GTR) may have all its nodes on the zero side
+                    // while a sliver of it is not: a sample there is judged by the pdf at the
+                    // sample, and only samples where the pdf is zero count as such.
+                    Some(i) if expected[i] == 0.0 && pdf(v) > 0.0 => {
+                        under_resolved[i] = true;
+                        observed[i] += 1.0;
+                    }
+                    Some(i) if expected[i] == 0.0 => observed[zero_pdf_cell] += 1.0,
                     Some(i) => observed[i] += 1.0,
                     None => invalid += 1,
                 },
             }
         }
+        // Integrate the under-resolved cells again, REFINED_QUADRATURE× finer in each
+        // direction; a sliver still below that resolution keeps the smallest positive count,
+        // so pooling merges it with the other nearly empty cells.
+        for cell in (0..n_cells).filter(|&c| under_resolved[c]) {
+            let refined = n * self.integrate_cell(cell, REFINED_QUADRATURE * self.quadrature, &pdf);
+            expected[cell] = refined.max(f64::MIN_POSITIVE);
+        }
+        let pdf_integral = expected[..n_cells].iter().sum::<f64>() / n;
         outcome(&observed, &expected, self.min_expected, invalid, pdf_integral)
     }
 }

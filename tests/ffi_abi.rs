@@ -65,8 +65,8 @@ enum P {
     C(&'static str, [f64; 3]),
 }
 
-/// The same parameters as an FFI handle and as a core medium.
-fn media(params: &[P]) -> (*mut mf_medium, MacrofacetMedium) {
+/// The same parameters as an FFI parameter set and as a core one.
+fn param_sets(params: &[P]) -> (*mut mf_params, ParamSet) {
     let mut set = ParamSet::new();
     let mut handle: *mut mf_params = ptr::null_mut();
     unsafe {
@@ -88,6 +88,14 @@ fn media(params: &[P]) -> (*mut mf_medium, MacrofacetMedium) {
             };
             assert_eq!(status, mf_status::MF_OK);
         }
+    }
+    (handle, set)
+}
+
+/// The same parameters as an FFI handle and as a core medium.
+fn media(params: &[P]) -> (*mut mf_medium, MacrofacetMedium) {
+    let (handle, set) = param_sets(params);
+    unsafe {
         let mut medium: *mut mf_medium = ptr::null_mut();
         assert_eq!(mf_medium_new(handle, &mut medium), mf_status::MF_OK);
         mf_params_free(handle);
@@ -111,6 +119,13 @@ fn all_media() -> Vec<(&'static str, Vec<P>)> {
         ("ggx kernel", vec![F("sigma", 0.05), S("distribution", "ggx"), F("lengthscale_x", 0.2), F("lengthscale_y", 0.1)]),
         ("gpss diffuse", vec![F("sigma", 0.3), F("alpha", 0.4), S("micro_bsdf", "diffuse"), C("reflectance", [0.2, 0.5, 0.8])]),
         ("beckmann diffuse", vec![F("sigma", 0.3), S("distribution", "beckmann"), F("alpha", 0.6), S("micro_bsdf", "diffuse")]),
+        ("gtr Ag", vec![F("sigma", 0.1), S("distribution", "gtr"), F("alpha", 0.3), F("gamma", 1.7), S("material", "Ag")]),
+        ("gtr dimov anisotropic", vec![F("sigma", 0.1), S("distribution", "gtr"), F("alpha_u", 0.2), F("alpha_v", 0.5),
+            F("gamma", 2.6), S("lambda", "dimov")]),
+        ("ggx skewed", vec![F("sigma", 0.2), S("distribution", "ggx"), F("alpha", 0.3), F("transform_xx", 1.0), F("transform_xy", 2.0),
+            F("transform_yx", 0.0), F("transform_yy", 1.0), S("material", "Au")]),
+        ("gtr stretched appendix b", vec![F("sigma", 0.2), S("distribution", "gtr"), F("alpha", 0.4), F("gamma", 1.2), F("stretch", -0.4),
+            S("vndf_sampling", "mixture")]),
     ]
 }
 
@@ -359,7 +374,7 @@ fn repr_c_layouts_match_the_c_test() {
 /// `f = z - 0.25`: a plane for the GPIS trace, counting its calls through `user_data`.
 unsafe extern "C" fn plane_sdf(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_sdf_sample) {
     *(user_data as *mut usize) += 1;
-    *out = mf_sdf_sample { f: p.z - 0.25, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
+    *out = mf_sdf_sample { f: p.z - 0.25, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, u: 0.0, v: 0.0 };
 }
 
 #[test]
@@ -539,5 +554,56 @@ impl macrofacet::surface::MeanSurface for PlaneSurface {
     }
     fn bounding_box(&self) -> macrofacet::surface::Aabb {
         macrofacet::surface::Aabb { min: DVec3::NEG_INFINITY, max: DVec3::new(f64::INFINITY, f64::INFINITY, 0.3) }
+    }
+}
+
+#[test]
+fn ndf_calls_equal_the_core_bit_for_bit() {
+    use macrofacet::ndf::MicrofacetDistribution;
+    let cases: Vec<Vec<P>> = {
+        use P::*;
+        vec![
+            vec![S("distribution", "gtr"), F("alpha", 0.3), F("gamma", 1.5)],
+            vec![S("distribution", "gtr"), F("alpha_u", 0.1), F("alpha_v", 0.4), F("gamma", 3.0), S("lambda", "dimov"), F("stretch", 0.3)],
+            vec![S("distribution", "ggx"), F("alpha", 0.2), F("transform_xx", 0.7), F("transform_xy", 0.9), F("transform_yx", -0.4), F("transform_yy", 1.3)],
+            vec![F("alpha_u", 0.3), F("alpha_v", 0.2)], // beckmann, the default
+        ]
+    };
+    let mut rng = Rng(777);
+    for params in cases {
+        let (handle, set) = param_sets(&params);
+        let mut ndf: *mut mf_ndf = ptr::null_mut();
+        unsafe {
+            assert_eq!(mf_ndf_new(handle, &mut ndf), mf_status::MF_OK);
+            mf_params_free(handle);
+        }
+        let core = macrofacet::params::ndf_from_params(&set).unwrap();
+        for _ in 0..200 {
+            let f = rng.frame();
+            let c = Core::new(&f);
+            let (wi, m) = (v(rng.direction()), v(rng.direction()));
+            let u = [rng.next(), rng.next(), rng.next()];
+            let (mut d, mut lambda, mut pdf) = (0.0, 0.0, 0.0);
+            let mut s = mf_ndf_sample { m: v(DVec3::ZERO), pdf: 0.0, valid: false };
+            unsafe {
+                assert_eq!(mf_ndf_eval(ndf, &f, m, &mut d), mf_status::MF_OK);
+                assert_eq!(mf_ndf_lambda(ndf, &f, wi, &mut lambda), mf_status::MF_OK);
+                assert_eq!(mf_ndf_pdf_visible(ndf, &f, wi, m, &mut pdf), mf_status::MF_OK);
+                assert_eq!(mf_ndf_sample_visible(ndf, &f, wi, u.as_ptr(), &mut s), mf_status::MF_OK);
+            }
+            let (wl, ml) = (c.local(wi), c.local(m));
+            assert_eq!(d.to_bits(), core.d(ml).to_bits());
+            assert_eq!(lambda.to_bits(), core.lambda(wl).to_bits());
+            assert_eq!(pdf.to_bits(), core.pdf_visible(wl, ml).to_bits());
+            match core.sample_visible(wl, u) {
+                Some(ms) => {
+                    assert!(s.valid);
+                    assert_eq!(bits3(dv(s.m).to_array()), bits3(c.frame.to_world(ms).to_array()));
+                    assert_eq!(s.pdf.to_bits(), core.pdf_visible(wl, ms).to_bits());
+                }
+                None => assert!(!s.valid && s.pdf == 0.0),
+            }
+        }
+        unsafe { mf_ndf_free(ndf) };
     }
 }

@@ -13,7 +13,7 @@ use common::spherical;
 use glam::DVec3;
 use macrofacet::fresnel::{conductor_preset, fresnel_conductor_rgb};
 use macrofacet::height::HeightProfile;
-use macrofacet::ndf::{Beckmann, Ggx, MicrofacetDistribution, Ndf};
+use macrofacet::ndf::{Beckmann, Ggx, Gtr, GtrLambda, Ltmd, LtmdBase, MicrofacetDistribution, Ndf};
 use macrofacet::slab::reflected_density;
 use macrofacet::stats::{mean_and_standard_error, Pcg32};
 use macrofacet::{MacrofacetMedium, MacrofacetPhase, MicroBsdf, VndfSampling};
@@ -32,6 +32,10 @@ fn single_scattering_equals_the_microfacet_brdf() {
         ("beckmann 0.3", Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap())),
         ("beckmann 0.6x0.2", Ndf::Beckmann(Beckmann::new(0.6, 0.2).unwrap())),
         ("ggx 0.5", Ndf::Ggx(Ggx::new(0.5, 0.5).unwrap())),
+        // seeds/001: heavier-than-GGX tail, and a skewed lighter one (Fig. 1's transform).
+        ("gtr 0.4 γ=1.5", Ndf::Gtr(Gtr::new(0.4, 1.5, GtrLambda::Exact).unwrap())),
+        ("gtr 0.3 γ=3 skew", Ndf::Ltmd(Ltmd::new(LtmdBase::Gtr(Gtr::new(0.3, 3.0, GtrLambda::Exact).unwrap()),
+            glam::DMat2::from_cols(glam::DVec2::new(1.0, 0.0), glam::DVec2::new(2.0, 1.0))).unwrap())),
     ];
     let pairs = [(spherical(0.0, 0.0), spherical(0.4, 1.0)), (spherical(0.9, 0.0), spherical(0.7, 3.0)), (spherical(1.3, 0.5), spherical(1.1, 0.6))];
     for (i, (name, ndf)) in cases.into_iter().enumerate() {
@@ -47,8 +51,8 @@ fn single_scattering_equals_the_microfacet_brdf() {
             for c in 0..3 {
                 let mut rng_c = rng.clone();
                 let (mean, se) = mean_and_standard_error((0..n).map(|_| reflected_density(&medium, *wi, *wo, 1, || rng_c.next_f64())[c]));
-                // 4.5 standard errors (Šidák over 27 comparisons at overall 1 %).
-                assert!((mean - analytic[c]).abs() <= 4.5 * se, "{name}, wi={wi}, wo={wo}, channel {c}: slab {mean} ± {se}, microfacet {}", analytic[c]);
+                // 4.6 standard errors (Šidák over 45 comparisons at overall 1 %).
+                assert!((mean - analytic[c]).abs() <= 4.6 * se, "{name}, wi={wi}, wo={wo}, channel {c}: slab {mean} ± {se}, microfacet {}", analytic[c]);
             }
             rng.next_u32();
         }

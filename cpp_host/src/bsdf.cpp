@@ -141,17 +141,26 @@ private:
     std::shared_ptr<const Texture> spec_;
 };
 
+/// The microfacet distribution of a rough conductor: mfrender's own Beckmann/GGX by value, or a
+/// library distribution (GTR, transforms) shared by reference.
+inline const Microfacet& distribution(const Microfacet& d) { return d; }
+inline const LibraryMicrofacet& distribution(const std::shared_ptr<const LibraryMicrofacet>& d) { return *d; }
+inline Vec3 sample_normal(const Microfacet& d, const Vec3& wo, const Vec2& u, float, float* pdf) { return d.sample(wo, u, pdf); }
+inline Vec3 sample_normal(const LibraryMicrofacet& d, const Vec3& wo, const Vec2& u, float u3, float* pdf) {
+    return d.sample(wo, u, u3, pdf);
+}
+
+template <class Holder>
 class RoughConductor final : public Bsdf {
 public:
-    RoughConductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec, MicrofacetType t, float au, float av,
-                   bool vis, bool hc)
-        : ior_(ior), spec_(std::move(spec)), mf_(t, au, av, vis, hc) {}
+    RoughConductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec, Holder mf)
+        : ior_(ior), spec_(std::move(spec)), mf_(std::move(mf)) {}
     Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         Vec3 h = normalize(wo + wi);
-        float D = mf_.D(h);
+        float D = dist().D(h);
         if (D == 0) return Rgb(0.0f);
-        float G = mf_.G(wo, wi, h);
+        float G = dist().G(wo, wi, h);
         return spec_->eval(uv) * conductor_fresnel(ior_, dot(wo, h)) * (D * G / (4.0f * wo.z));
     }
     float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
@@ -159,12 +168,13 @@ public:
         Vec3 h = normalize(wo + wi);
         float d = dot(wo, h);
         if (d <= 0) return 0.0f;
-        return mf_.pdf(wo, h) / (4.0f * d);
+        return dist().pdf(wo, h) / (4.0f * d);
     }
-    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+    // u_lobe (one lobe here) is the third uniform of the library's visible-normal sampler.
+    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         float mpdf;
-        Vec3 m = mf_.sample(wo, u, &mpdf);
+        Vec3 m = sample_normal(dist(), wo, u, u_lobe, &mpdf);
         if (!(mpdf > 0)) return false;
         float d = dot(wo, m);
         if (d <= 0) return false;
@@ -182,9 +192,11 @@ public:
     std::string name() const override { return "roughconductor"; }
 
 private:
+    const auto& dist() const { return distribution(mf_); }
+
     ConductorIor ior_;
     std::shared_ptr<const Texture> spec_;
-    Microfacet mf_;
+    Holder mf_;
 };
 
 class Dielectric final : public Bsdf {
@@ -376,7 +388,11 @@ std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, std::shared_ptr<co
 }
 std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> s, MicrofacetType t,
                                            float au, float av, bool vis, bool hc) {
-    return std::make_shared<RoughConductor>(ior, s, t, au, av, vis, hc);
+    return std::make_shared<RoughConductor<Microfacet>>(ior, s, Microfacet(t, au, av, vis, hc));
+}
+std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> s,
+                                           std::shared_ptr<const LibraryMicrofacet> distribution) {
+    return std::make_shared<RoughConductor<std::shared_ptr<const LibraryMicrofacet>>>(ior, s, std::move(distribution));
 }
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {
     return std::make_shared<Dielectric>(int_ior / ext_ior, r, t);

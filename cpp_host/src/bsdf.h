@@ -10,6 +10,7 @@
 
 #include "math.h"
 #include "microfacet.h"
+#include "microfacet_library.h"
 #include "texture.h"
 
 namespace mf {
@@ -60,6 +61,9 @@ std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, std::shared_ptr<co
 std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> specular_reflectance,
                                            MicrofacetType type, float alpha_u, float alpha_v, bool sample_visible,
                                            bool height_correlated = false);
+/// A rough conductor over a library distribution (GTR, transformed microsurfaces; seeds/001).
+std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> specular_reflectance,
+                                           std::shared_ptr<const LibraryMicrofacet> distribution);
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);
 /// Mitsuba's thindielectric (a thin slab: mirror reflection or straight transmission).
 std::shared_ptr<Bsdf> make_thin_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);

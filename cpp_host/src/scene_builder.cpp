@@ -17,6 +17,8 @@
 #include "medium_macrofacet.h"
 #include "sdf_grid.h"
 
+#include <macrofacet.h>
+
 namespace mf {
 
 namespace {
@@ -156,10 +158,16 @@ private:
                 b = make_conductor(ior, spec);
             } else {
                 std::string dist = o.get_string("distribution", "beckmann");
+                if (uses_library_distribution(o, dist)) {
+                    b = make_rough_conductor(ior, spec, library_distribution(o, dist));
+                    o.check_all_used();
+                    bsdfs_[&o] = b;
+                    return b;
+                }
                 MicrofacetType mt;
                 if (dist == "beckmann") mt = MicrofacetType::Beckmann;
                 else if (dist == "ggx") mt = MicrofacetType::GGX;
-                else throw perr(o, "distribution", "must be \"beckmann\" or \"ggx\", got \"" + dist + "\"");
+                else throw perr(o, "distribution", "must be \"beckmann\", \"ggx\" or \"gtr\", got \"" + dist + "\"");
                 float au, av;
                 if (o.has("alpha_u") || o.has("alpha_v")) {
                     if (o.has("alpha")) throw err(o, "specify either alpha or alpha_u/alpha_v, not both");
@@ -257,6 +265,52 @@ private:
         t.check_all_used();
         textures_[&t] = tex;
         return tex;
+    }
+
+    /// The roughconductor parameters the library's distributions take beyond mfrender's own.
+    static const std::vector<std::string>& library_float_params() {
+        static const std::vector<std::string> names = {"gamma", "stretch", "transform_xx", "transform_xy",
+                                                       "transform_yx", "transform_yy"};
+        return names;
+    }
+
+    /// GTR and the microsurface transforms (seeds/001) are the library's (mf_ndf).
+    static bool uses_library_distribution(const SceneObject& o, const std::string& dist) {
+        if (dist == "gtr" || o.has("lambda")) return true;
+        for (const auto& n : library_float_params())
+            if (o.has(n)) return true;
+        return false;
+    }
+
+    /// Fills an mf_params from the roughconductor's distribution parameters and builds the
+    /// library distribution; a library error is reported at the parameter it names.
+    std::shared_ptr<const LibraryMicrofacet> library_distribution(const SceneObject& o, const std::string& dist) {
+        if (!o.get_bool("sample_visible", true))
+            throw perr(o, "sample_visible", "must be true for distribution " + quote(dist) + " and microsurface transforms (the library samples visible normals exactly)");
+        std::string shadowing = o.get_string("shadowing", "separable");
+        if (shadowing != "separable" && shadowing != "height_correlated")
+            throw perr(o, "shadowing", "must be \"separable\" or \"height_correlated\", got \"" + shadowing + "\"");
+        mf_params* params = nullptr;
+        if (mf_params_new(&params) != MF_OK) throw err(o, "mf_params_new failed");
+        std::unique_ptr<mf_params, void (*)(mf_params*)> guard(params, mf_params_free);
+        std::vector<std::string> names = {"alpha", "alpha_u", "alpha_v"};
+        names.insert(names.end(), library_float_params().begin(), library_float_params().end());
+        bool ok = mf_params_set_string(params, "distribution", dist.c_str()) == MF_OK;
+        for (const auto& n : names)
+            if (o.has(n)) ok = ok && mf_params_set_float(params, n.c_str(), o.get_float(n)) == MF_OK;
+        if (o.has("lambda")) ok = ok && mf_params_set_string(params, "lambda", o.get_string("lambda").c_str()) == MF_OK;
+        if (!o.has("alpha") && !o.has("alpha_u") && !o.has("alpha_v"))  // Mitsuba's default roughness
+            ok = ok && mf_params_set_float(params, "alpha", 0.1) == MF_OK;
+        try {
+            if (!ok) throw Error(mf_last_error());
+            return make_library_microfacet(params, shadowing == "height_correlated", "roughconductor");
+        } catch (const Error& e) {
+            std::string msg = e.what();
+            names.insert(names.end(), {"distribution", "lambda"});
+            for (const auto& n : names)
+                if (o.has(n) && msg.find("\"" + n + "\"") != std::string::npos) throw perr(o, n, msg);
+            throw err(o, msg);
+        }
     }
 
     float roughness(const SceneObject& o, const std::string& name) {
@@ -850,23 +904,25 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               bilinear|nearest, wrap_mode repeat|mirror|clamp, raw, to_uv), nested with
               name="param" or <ref name="param" id>
   bsdfs       diffuse (reflectance (tex)), conductor (material | eta,k; specular_reflectance (tex)),
-              roughconductor (distribution beckmann|ggx, alpha | alpha_u,alpha_v, material |
+              roughconductor (distribution beckmann|ggx|gtr, alpha | alpha_u,alpha_v, material |
               eta,k, specular_reflectance (tex), sample_visible; mfrender extension: shadowing
-              separable (default, Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o))),
+              separable (default, Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o));
+              from the library: gtr's gamma, lambda exact|dimov, and the microsurface transform
+              stretch | transform_xx,_xy,_yx,_yy of any distribution (seeds/001)),
               dielectric (int_ior, ext_ior: number or name), null, twosided (one or two bsdfs)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
               macrofacet (as the interior of its mean-surface shape; parameters as in the
               C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
-              lengthscale*, micro_bsdf, material | eta,k, specular_reflectance,
-              reflectance, vndf_sampling, mixture_ratio); sigma, variance, alpha*,
-              lengthscale*, specular_reflectance, reflectance and the anisotropy may be a
-              nested <volume> (constvolume: value; gridvolume: filename .vol | .vdb with grid,
-              to_world, filter_type trilinear|nearest, wrap_mode clamp|repeat|mirror,
-              use_grid_bbox) or <texture>; or in the form that Mitsuba 3 with the
-              macrofacet plugin also reads: the medium nests its mean surface as
-              <shape name="mean_surface"> (sphere or mesh) and the shapes whose interior
-              it is are boundaries (<bsdf type="null"/>, containing f < k sigma)
+              lengthscale*, gamma, lambda, stretch | transform_*, micro_bsdf, material |
+              eta,k, specular_reflectance, reflectance, vndf_sampling, mixture_ratio);
+              sigma, variance, alpha*, lengthscale*, specular_reflectance, reflectance and
+              the anisotropy may be a nested <volume> (constvolume: value; gridvolume:
+              filename .vol | .vdb with grid, to_world, filter_type trilinear|nearest,
+              wrap_mode clamp|repeat|mirror, use_grid_bbox) or <texture>; or in the form that
+              Mitsuba 3 with the macrofacet plugin also reads: the medium nests its mean
+              surface as <shape name="mean_surface"> (sphere or mesh) and the shapes whose
+              interior it is are boundaries (<bsdf type="null"/>, containing f < k sigma)
               gpis (realization-based ground truth; as the interior of its mean-surface
               shape; the macrofacet names that apply: sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,

@@ -157,7 +157,7 @@ fn length(name: &str, t: f64) -> FfiResult<f64> {
     }
 }
 
-fn uniform(name: impl std::fmt::Display, u: f64) -> FfiResult<f64> {
+pub(super) fn uniform(name: impl std::fmt::Display, u: f64) -> FfiResult<f64> {
     if (0.0..1.0).contains(&u) {
         Ok(u)
     } else {

@@ -18,6 +18,7 @@
 mod field;
 mod gpis;
 mod medium;
+mod ndf;
 mod params;
 mod surface;
 mod track;
@@ -25,6 +26,7 @@ mod track;
 pub use field::*;
 pub use gpis::*;
 pub use medium::*;
+pub use ndf::*;
 pub use params::*;
 pub use surface::*;
 pub use track::*;

@@ -49,4 +49,11 @@ impl MicrofacetDistribution for Beckmann {
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
         self.gradient().sample_visible(wi, u)
     }
+
+    /// `m ∝ D(m)(m·n)`: the slopes are Gaussian with variances `α²/2` (Box–Muller).
+    fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
+        let (x, y) = super::gaussian_gradient::box_muller(u[0], u[1]);
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        DVec3::new(-self.alpha_u * s * x, -self.alpha_v * s * y, 1.0).try_normalize()
+    }
 }

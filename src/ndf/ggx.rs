@@ -60,4 +60,12 @@ impl MicrofacetDistribution for Ggx {
         let m = (m_std * self.stretch()).try_normalize()?;
         (m.z > 0.0 && wi.dot(m) > 0.0).then_some(m)
     }
+
+    /// `m ∝ D(m)(m·n)`: in the stretched configuration the slope radius has
+    /// `r² = u/(1 − u)` (Walter et al. 2007), then the stretch.
+    fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
+        let r = (u[0] / (1.0 - u[0])).sqrt();
+        let phi = 2.0 * PI * u[1];
+        DVec3::new(-self.alpha_u * r * phi.cos(), -self.alpha_v * r * phi.sin(), 1.0).try_normalize()
+    }
 }

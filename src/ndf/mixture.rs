@@ -33,14 +33,7 @@ impl BeckmannUniformMixture {
             let u0 = u[0] / self.ratio;
             self.ndf.beckmann().sample_visible(wi, [u0, u[1], u[2]])
         } else {
-            let u0 = (u[0] - self.ratio) / (1.0 - self.ratio);
-            // Uniform hemisphere around wi: cos θ uniform in [0, 1).
-            let cos = 1.0 - u0;
-            let sin = (1.0 - cos * cos).max(0.0).sqrt();
-            let (s, t) = wi.any_orthonormal_pair();
-            let phi = 2.0 * PI * u[1];
-            let m = (s * phi.cos() + t * phi.sin()) * sin + wi * cos;
-            m.try_normalize()
+            uniform_hemisphere_around(wi, (u[0] - self.ratio) / (1.0 - self.ratio), u[1])
         }
     }
 
@@ -51,4 +44,13 @@ impl BeckmannUniformMixture {
         }
         self.ratio * self.ndf.beckmann().pdf_visible(wi, m) + (1.0 - self.ratio) / (2.0 * PI)
     }
+}
+
+/// A uniform direction on the hemisphere around `axis` (`cos θ` uniform in `(0, 1]`).
+pub(super) fn uniform_hemisphere_around(axis: DVec3, u0: f64, u1: f64) -> Option<DVec3> {
+    let cos = 1.0 - u0;
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let (s, t) = axis.any_orthonormal_pair();
+    let phi = 2.0 * PI * u1;
+    ((s * phi.cos() + t * phi.sin()) * sin + axis * cos).try_normalize()
 }

@@ -17,13 +17,19 @@ mod gaussian_gradient;
 mod ggx;
 mod gpss;
 mod gpss_matrix;
+mod gtr;
+mod ltmd;
 mod mixture;
+mod normal_mixture;
 
 pub use beckmann::Beckmann;
 pub use ggx::Ggx;
 pub use gpss::Gpss;
 pub use gpss_matrix::GpssMatrix;
+pub use gtr::{Gtr, GtrLambda};
+pub use ltmd::{Ltmd, LtmdBase};
 pub use mixture::BeckmannUniformMixture;
+pub use normal_mixture::NormalUniformMixture;
 
 use glam::DVec3;
 
@@ -46,13 +52,30 @@ pub trait MicrofacetDistribution {
     /// is visible from `wi` (zero projected area).
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3>;
 
+    /// The projected area that normalises the visible normals [`Self::sample_visible`] draws,
+    /// `∫ <w, m> D(m) dm` of this `D`. It equals [`Self::projected_area`] unless the
+    /// distribution reports a Smith Λ that is a model rather than the projected area of its
+    /// `D` (GTR with Dimov's Λ, seeds/001 Appendix A); then `eval/pdf` of a phase sample
+    /// measures that inconsistency instead of hiding it.
+    fn sampling_projected_area(&self, w: DVec3) -> f64 {
+        self.projected_area(w)
+    }
+
+    /// Samples `m ∝ D(m) (m·n)` (the classic NDF sampling that seeds/001 Eqs. 25–26 transform)
+    /// with two uniforms; `None` when the distribution has no such sampler (normals below the
+    /// horizon).
+    fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
+        let _ = u;
+        None
+    }
+
     /// The density of [`Self::sample_visible`] per solid angle of `m`: `D_wi(m)`.
     fn pdf_visible(&self, wi: DVec3, m: DVec3) -> f64 {
         let cos = wi.dot(m);
         if cos <= 0.0 {
             return 0.0;
         }
-        let area = self.projected_area(wi);
+        let area = self.sampling_projected_area(wi);
         if area > 0.0 {
             cos * self.d(m) / area
         } else {
@@ -69,6 +92,8 @@ pub enum Ndf {
     Gpss(Gpss),
     /// A full local anisotropy (spatially varying media; built per query, not by name).
     GpssMatrix(GpssMatrix),
+    Gtr(Gtr),
+    Ltmd(Ltmd),
 }
 
 impl MicrofacetDistribution for Ndf {
@@ -78,6 +103,8 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Ggx(x) => x.d(m),
             Ndf::Gpss(x) => x.d(m),
             Ndf::GpssMatrix(x) => x.d(m),
+            Ndf::Gtr(x) => x.d(m),
+            Ndf::Ltmd(x) => x.d(m),
         }
     }
     fn projected_area(&self, w: DVec3) -> f64 {
@@ -86,6 +113,8 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Ggx(x) => x.projected_area(w),
             Ndf::Gpss(x) => x.projected_area(w),
             Ndf::GpssMatrix(x) => x.projected_area(w),
+            Ndf::Gtr(x) => x.projected_area(w),
+            Ndf::Ltmd(x) => x.projected_area(w),
         }
     }
     fn lambda(&self, w: DVec3) -> f64 {
@@ -94,6 +123,8 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Ggx(x) => x.lambda(w),
             Ndf::Gpss(x) => x.lambda(w),
             Ndf::GpssMatrix(x) => x.lambda(w),
+            Ndf::Gtr(x) => x.lambda(w),
+            Ndf::Ltmd(x) => x.lambda(w),
         }
     }
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
@@ -102,6 +133,38 @@ impl MicrofacetDistribution for Ndf {
             Ndf::Ggx(x) => x.sample_visible(wi, u),
             Ndf::Gpss(x) => x.sample_visible(wi, u),
             Ndf::GpssMatrix(x) => x.sample_visible(wi, u),
+            Ndf::Gtr(x) => x.sample_visible(wi, u),
+            Ndf::Ltmd(x) => x.sample_visible(wi, u),
+        }
+    }
+    fn sampling_projected_area(&self, w: DVec3) -> f64 {
+        match self {
+            Ndf::Beckmann(x) => x.sampling_projected_area(w),
+            Ndf::Ggx(x) => x.sampling_projected_area(w),
+            Ndf::Gpss(x) => x.sampling_projected_area(w),
+            Ndf::GpssMatrix(x) => x.sampling_projected_area(w),
+            Ndf::Gtr(x) => x.sampling_projected_area(w),
+            Ndf::Ltmd(x) => x.sampling_projected_area(w),
+        }
+    }
+    fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
+        match self {
+            Ndf::Beckmann(x) => x.sample_normal(u),
+            Ndf::Ggx(x) => x.sample_normal(u),
+            Ndf::Gpss(x) => x.sample_normal(u),
+            Ndf::GpssMatrix(x) => x.sample_normal(u),
+            Ndf::Gtr(x) => x.sample_normal(u),
+            Ndf::Ltmd(x) => x.sample_normal(u),
+        }
+    }
+    fn pdf_visible(&self, wi: DVec3, m: DVec3) -> f64 {
+        match self {
+            Ndf::Beckmann(x) => x.pdf_visible(wi, m),
+            Ndf::Ggx(x) => x.pdf_visible(wi, m),
+            Ndf::Gpss(x) => x.pdf_visible(wi, m),
+            Ndf::GpssMatrix(x) => x.pdf_visible(wi, m),
+            Ndf::Gtr(x) => x.pdf_visible(wi, m),
+            Ndf::Ltmd(x) => x.pdf_visible(wi, m),
         }
     }
 }
@@ -141,6 +204,8 @@ impl Ndf {
                 let iso = |a2: f64| Ndf::Gpss(Gpss { alpha_x: a2.sqrt(), alpha_y: a2.sqrt(), alpha_z: a2.sqrt() });
                 (iso(hi), iso(lo))
             }
+            Ndf::Gtr(g) => (Ndf::Gtr(g), Ndf::Gtr(g)),
+            Ndf::Ltmd(l) => (Ndf::Ltmd(l.isotropic_bound(true)), Ndf::Ltmd(l.isotropic_bound(false))),
         }
     }
 
@@ -157,6 +222,18 @@ impl Ndf {
             Ndf::Gpss(g) => gaussian(DVec3::new(g.alpha_x, g.alpha_y, g.alpha_z)),
             // E|g|² = 1 + tr(Cov g) = 1 + tr(Q)/2.
             Ndf::GpssMatrix(g) => (1.0 + 0.5 * (g.q().x_axis.x + g.q().y_axis.y + g.q().z_axis.z)).sqrt(),
+            // GTR: |∇A| = |∫_{w·m>0} m D dm| <= ∫ D dm.
+            Ndf::Gtr(g) => g.total_mass(),
+            Ndf::Ltmd(l) => l.projected_area_lipschitz(),
+        }
+    }
+
+    /// True when [`MicrofacetDistribution::projected_area`] is the projected area of `D` (false
+    /// for GTR with Dimov's Λ), so that a phase sample's `eval/pdf` is the flake's reflectance.
+    pub fn lambda_is_projected_area(&self) -> bool {
+        match self {
+            Ndf::Gtr(g) | Ndf::Ltmd(Ltmd { base: LtmdBase::Gtr(g), .. }) => g.lambda == GtrLambda::Exact,
+            _ => true,
         }
     }
 
@@ -167,6 +244,8 @@ impl Ndf {
             Ndf::Ggx(g) => g.alpha_u == g.alpha_v,
             Ndf::Gpss(g) => g.alpha_x == g.alpha_y,
             Ndf::GpssMatrix(_) => false,
+            Ndf::Gtr(_) => true,
+            Ndf::Ltmd(l) => l.is_isotropic(),
         }
     }
 }

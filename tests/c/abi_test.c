@@ -261,6 +261,9 @@ _Static_assert(sizeof(mf_phase_sample_query) == 112 && offsetof(mf_phase_sample_
                "mf_phase_sample_query");
 _Static_assert(sizeof(mf_status) == 4, "mf_status is a C int-sized enum");
 _Static_assert(MF_PHASE_SAMPLE_DIMENSIONS == 5, "phase sample dimensions");
+_Static_assert(sizeof(mf_ndf_sample) == 40 && offsetof(mf_ndf_sample, pdf) == 24 && offsetof(mf_ndf_sample, valid) == 32,
+               "mf_ndf_sample");
+_Static_assert(MF_NDF_SAMPLE_DIMENSIONS == 3, "ndf sample dimensions");
 
 static void test_version_and_status(void) {
   const char *v = mf_version();
@@ -424,8 +427,8 @@ static void test_medium_new_errors(void) {
        {0.5, -0.5, 0.5}, MF_ERROR_INVALID_VALUE, "specular_reflectance"},
       {"reflectance on a conductor", {{"sigma", 1.0}, {"alpha", 0.3}}, {NULL}, "reflectance", {0.5, 0.5, 0.5},
        MF_ERROR_UNKNOWN_PARAMETER, "reflectance"},
-      {"mixture on ggx", {{"sigma", 1.0}, {"alpha", 0.3}}, {"distribution", "ggx", "vndf_sampling", "mixture", NULL},
-       NULL, {0}, MF_ERROR_INVALID_VALUE, "mixture"},
+      {"mixture_ratio 1 on ggx (Appendix B)", {{"sigma", 1.0}, {"alpha", 0.3}, {"mixture_ratio", 1.0}},
+       {"distribution", "ggx", "vndf_sampling", "mixture", NULL}, NULL, {0}, MF_ERROR_INVALID_VALUE, "mixture_ratio"},
       {"mixture with diffuse flakes", {{"sigma", 1.0}, {"alpha", 0.3}},
        {"micro_bsdf", "diffuse", "vndf_sampling", "mixture", NULL}, NULL, {0}, MF_ERROR_INVALID_VALUE, "mixture"},
       {"mixture_ratio out of (0,1)", {{"sigma", 1.0}, {"alpha", 0.3}, {"mixture_ratio", 1.5}},
@@ -1844,6 +1847,133 @@ static void test_gpis_fields(void) {
   mf_gpis_free(g);
 }
 
+
+/* ------------------------------------------------------------------------------ mf_ndf */
+
+static mf_ndf *build_ndf(const named_float *floats, const char *const *strings) {
+  mf_params *p = NULL;
+  mf_ndf *n = NULL;
+  EXPECT_OK(mf_params_new(&p));
+  for (; floats && floats->name; ++floats) EXPECT_OK(mf_params_set_float(p, floats->name, floats->value));
+  for (; strings && strings[0]; strings += 2) EXPECT_OK(mf_params_set_string(p, strings[0], strings[1]));
+  EXPECT_OK(mf_ndf_new(p, &n));
+  mf_params_free(p);
+  CHECK(n != NULL, "ndf not built: %s", last_error());
+  return n;
+}
+
+/* Expects mf_ndf_new to fail with `want` and a message naming `needle`. */
+static void expect_ndf_error(const named_float *floats, const char *const *strings, mf_status want, const char *needle) {
+  mf_params *p = NULL;
+  mf_ndf *n = (mf_ndf *)&g_rng; /* must stay untouched */
+  EXPECT_OK(mf_params_new(&p));
+  for (; floats && floats->name; ++floats) EXPECT_OK(mf_params_set_float(p, floats->name, floats->value));
+  for (; strings && strings[0]; strings += 2) EXPECT_OK(mf_params_set_string(p, strings[0], strings[1]));
+  EXPECT_STATUS(mf_ndf_new(p, &n), want, needle);
+  CHECK(n == (mf_ndf *)&g_rng, "out_ndf written on failure");
+  mf_params_free(p);
+}
+
+static void test_ndf(void) {
+  /* GTR with gamma = 2 is GGX (seeds/001 Eq. 32 vs 37). */
+  const named_float f2[] = {{"alpha", 0.3}, {"gamma", 2.0}, {NULL, 0}};
+  const char *const gtr[] = {"distribution", "gtr", NULL};
+  mf_ndf *n = build_ndf(f2, gtr);
+  const double a = 0.3;
+  for (int i = 0; i < 20; ++i) {
+    mf_vec3 w = spherical(0.2 + 0.06 * i, 0.3 * i);
+    double d = 0, lambda = 0;
+    EXPECT_OK(mf_ndf_eval(n, &FRAME_Z, w, &d));
+    double q = (w.x * w.x + w.y * w.y) / (a * a) + w.z * w.z;
+    CHECK_REL(d, 1.0 / (PI * a * a * q * q), 1e-12);
+    EXPECT_OK(mf_ndf_lambda(n, &FRAME_Z, w, &lambda));
+    const double alpha[2] = {a, a};
+    CHECK_REL(lambda, lambda_ggx_cb(w, alpha), 1e-9);
+  }
+  double horizon = 0;
+  EXPECT_OK(mf_ndf_lambda(n, &FRAME_Z, v3(1, 0, 0), &horizon));
+  CHECK(isinf(horizon) && horizon > 0, "Λ on the horizon: %g", horizon);
+  mf_ndf_free(n);
+
+  /* A stretched heavy-tailed GTR (seeds/001 Eq. 31): samples are visible unit normals whose
+     reported density is mf_ndf_pdf_visible's; a tilted frame gives the same local answers. */
+  const named_float f[] = {{"alpha", 0.3}, {"gamma", 1.5}, {"stretch", 0.5}, {NULL, 0}};
+  n = build_ndf(f, gtr);
+  basis b = basis_of(FRAME_TILTED);
+  for (int i = 0; i < 200; ++i) {
+    mf_vec3 wi_local = spherical(0.01 + 1.5 * uniform01(), 6.28 * uniform01());
+    double u[MF_NDF_SAMPLE_DIMENSIONS] = {uniform01(), uniform01(), uniform01()};
+    mf_ndf_sample s, t;
+    EXPECT_OK(mf_ndf_sample_visible(n, &FRAME_Z, wi_local, u, &s));
+    CHECK(s.valid, "no visible normal from above");
+    CHECK_ABS(dot(s.m, s.m), 1.0, 1e-12);
+    CHECK(dot(s.m, wi_local) > 0, "sampled normal faces away from wi");
+    double pdf = 0;
+    EXPECT_OK(mf_ndf_pdf_visible(n, &FRAME_Z, wi_local, s.m, &pdf));
+    CHECK_REL(s.pdf, pdf, 1e-12);
+    EXPECT_OK(mf_ndf_sample_visible(n, &FRAME_TILTED, to_world(b, wi_local), u, &t));
+    mf_vec3 back = to_local(b, t.m);
+    CHECK_ABS(back.x, s.m.x, 1e-9);
+    CHECK_ABS(back.z, s.m.z, 1e-9);
+  }
+  /* Straight from below nothing of a height field is visible. */
+  double u0[MF_NDF_SAMPLE_DIMENSIONS] = {0.5, 0.5, 0.5};
+  mf_ndf_sample none;
+  EXPECT_OK(mf_ndf_sample_visible(n, &FRAME_Z, v3(0, 0, -1), u0, &none));
+  CHECK(!none.valid && none.pdf == 0.0, "visible normal from straight below");
+
+  /* Bad arguments: a status, a message naming the argument, outputs untouched. */
+  double x = 42;
+  EXPECT_STATUS(mf_ndf_eval(NULL, &FRAME_Z, v3(0, 0, 1), &x), MF_ERROR_NULL_POINTER, "ndf");
+  EXPECT_STATUS(mf_ndf_eval(n, NULL, v3(0, 0, 1), &x), MF_ERROR_NULL_POINTER, "frame");
+  EXPECT_STATUS(mf_ndf_eval(n, &FRAME_Z, v3(0, 0, NAN), &x), MF_ERROR_INVALID_ARGUMENT, "m");
+  EXPECT_STATUS(mf_ndf_lambda(n, &FRAME_Z, v3(0, 0, 2), &x), MF_ERROR_INVALID_ARGUMENT, "w");
+  EXPECT_STATUS(mf_ndf_lambda(n, &FRAME_Z, v3(0, 0, 1), NULL), MF_ERROR_NULL_POINTER, "out_lambda");
+  EXPECT_STATUS(mf_ndf_pdf_visible(n, &FRAME_Z, v3(0, 0, 1), v3(0, 0, 0), &x), MF_ERROR_INVALID_ARGUMENT, "m");
+  CHECK(x == 42, "output written on failure");
+  double bad_u[MF_NDF_SAMPLE_DIMENSIONS] = {0.5, 0.5, 1.0};
+  mf_ndf_sample keep = {{7, 7, 7}, 7, true};
+  EXPECT_STATUS(mf_ndf_sample_visible(n, &FRAME_Z, v3(0, 0, 1), bad_u, &keep), MF_ERROR_INVALID_ARGUMENT, "u[2]");
+  EXPECT_STATUS(mf_ndf_sample_visible(n, &FRAME_Z, v3(0, 0, 1), NULL, &keep), MF_ERROR_NULL_POINTER, "u");
+  CHECK(keep.pdf == 7 && keep.valid, "sample written on failure");
+  mf_ndf_free(n);
+  mf_ndf_free(NULL);
+
+  /* Parameter errors name the parameter. */
+  EXPECT_STATUS(mf_ndf_new(NULL, &n), MF_ERROR_NULL_POINTER, "params");
+  const named_float no_gamma[] = {{"alpha", 0.3}, {NULL, 0}};
+  expect_ndf_error(no_gamma, gtr, MF_ERROR_MISSING_PARAMETER, "gamma");
+  const named_float big_gamma[] = {{"alpha", 0.3}, {"gamma", 4.5}, {NULL, 0}};
+  expect_ndf_error(big_gamma, gtr, MF_ERROR_INVALID_VALUE, "gamma");
+  const char *const ggx[] = {"distribution", "ggx", NULL};
+  const named_float gamma_on_ggx[] = {{"alpha", 0.3}, {"gamma", 1.5}, {NULL, 0}};
+  expect_ndf_error(gamma_on_ggx, ggx, MF_ERROR_UNKNOWN_PARAMETER, "gamma");
+  const char *const bad_lambda[] = {"distribution", "gtr", "lambda", "smith", NULL};
+  expect_ndf_error(f2, bad_lambda, MF_ERROR_INVALID_VALUE, "lambda");
+  const char *const gpss[] = {"distribution", "gpss", NULL};
+  expect_ndf_error(no_gamma, gpss, MF_ERROR_INVALID_VALUE, "distribution");
+  const named_float partial[] = {{"alpha", 0.3}, {"transform_xx", 1}, {"transform_xy", 2}, {"transform_yx", 0}, {NULL, 0}};
+  expect_ndf_error(partial, ggx, MF_ERROR_MISSING_PARAMETER, "transform_yy");
+  const named_float singular[] = {{"alpha", 0.3}, {"transform_xx", 1}, {"transform_xy", 2}, {"transform_yx", 2}, {"transform_yy", 4}, {NULL, 0}};
+  expect_ndf_error(singular, ggx, MF_ERROR_INVALID_VALUE, "transform_xx");
+  const named_float both[] = {{"alpha", 0.3}, {"stretch", 0.2}, {"transform_xx", 1}, {"transform_xy", 0}, {"transform_yx", 0}, {"transform_yy", 1}, {NULL, 0}};
+  expect_ndf_error(both, ggx, MF_ERROR_MISSING_PARAMETER, "stretch");
+  const named_float stretch_one[] = {{"alpha", 0.3}, {"stretch", 1.0}, {NULL, 0}};
+  expect_ndf_error(stretch_one, ggx, MF_ERROR_INVALID_VALUE, "stretch");
+  const named_float sigma[] = {{"alpha", 0.3}, {"sigma", 0.1}, {NULL, 0}};
+  expect_ndf_error(sigma, ggx, MF_ERROR_UNKNOWN_PARAMETER, "sigma");
+
+  /* The medium takes the same names. */
+  const named_float mf[] = {{"sigma", 0.1}, {"alpha_u", 0.2}, {"alpha_v", 0.5}, {"gamma", 1.2}, {"transform_xx", 1},
+                            {"transform_xy", 2}, {"transform_yx", 0}, {"transform_yy", 1}, {NULL, 0}};
+  const char *const gtr_dimov[] = {"distribution", "gtr", "lambda", "dimov", NULL};
+  mf_medium *m = build(mf, gtr_dimov, NULL, NULL, NULL, NULL);
+  double st = 0;
+  EXPECT_OK(mf_medium_sigma_t(m, &FRAME_Z, 0.0, v3(0, 0.6, -0.8), &st));
+  CHECK(st > 0 && isfinite(st), "sigma_t of a GTR medium: %g", st);
+  mf_medium_free(m);
+}
+
 int main(void) {
   test_last_error_message(); /* first: checks the fresh-thread state */
   test_version_and_status();
@@ -1859,6 +1989,7 @@ int main(void) {
   test_surfaces_and_tracking();
   test_fields();
   test_gpis_fields();
+  test_ndf();
   if (g_failures) {
     fprintf(stderr, "abi_test: %d of %d checks FAILED\n", g_failures, g_checks);
     return 1;

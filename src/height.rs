@@ -11,7 +11,8 @@
 //! ray would meet there with probability `1 − Φ(k)` (1.3e-3 for k = 3) — that bounds the region
 //! a host must march through.
 
-use crate::error::{check_positive, Result};
+use crate::error::Result;
+use crate::limits::{check_shell_extent, check_sigma};
 use crate::special::{ln_normal_cdf, normal_pdf_over_cdf};
 
 /// Default `k` of the `+kσ` top face (seeds/000 Sec. 4 uses 3σ).
@@ -26,11 +27,10 @@ pub struct HeightProfile {
 }
 
 impl HeightProfile {
+    /// `sigma` within [`crate::limits::SIGMA_RANGE`], `shell_extent` within
+    /// `(0, SHELL_EXTENT_MAX]`.
     pub fn new(sigma: f64, shell_extent: f64) -> Result<HeightProfile> {
-        Ok(HeightProfile {
-            sigma: check_positive("sigma", sigma, false)?,
-            shell_extent: check_positive("shell_extent", shell_extent, false)?,
-        })
+        Ok(HeightProfile { sigma: check_sigma("parameter \"sigma\"", sigma)?, shell_extent: check_shell_extent(shell_extent)? })
     }
 
     /// Signed distance of the shell's top face, `kσ`.

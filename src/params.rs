@@ -23,6 +23,7 @@ use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
 use crate::gpis::{GpisSurface, MarchSettings, Memory, SeKernel};
 use crate::height::{HeightProfile, DEFAULT_SHELL_EXTENT};
+use crate::limits::{check_alpha_z, check_roughness, check_shell_extent, check_sigma};
 use crate::medium::MacrofacetMedium;
 use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Ndf};
 use crate::phase::{MacrofacetPhase, MicroBsdf, VndfSampling};
@@ -244,7 +245,7 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
     let sigma = read_sigma(&r)?;
     let mut settings = MarchSettings::default();
     if let Some(k) = r.float("shell_extent")? {
-        settings.envelope = check_positive("shell_extent", k, false)?;
+        settings.envelope = check_shell_extent(k)?;
     }
     if let Some(rho) = r.float("step_correlation")? {
         if !(rho > 0.0 && rho < 1.0) {
@@ -262,6 +263,7 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
         other => return Err(invalid_choice("distribution", other, "\"gpss\", \"beckmann\"")),
     };
     let alpha = read_roughness(&r, sigma, !height_field)?;
+    check_march_length(&settings, alpha)?;
     let kernel = SeKernel::from_roughness(sigma, glam::DVec3::from_array(alpha))?;
     let memory = match r.string("memory")?.unwrap_or("renewal_plus") {
         "renewal" => Memory::Renewal,
@@ -276,11 +278,36 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
     Ok(GpisSurface { kernel, memory, settings, micro_bsdf })
 }
 
-/// `sigma` from `sigma` or `variance` (exactly one).
+/// Most samples a gpis march may take to cross its band `±kσ` along the normal: the march of
+/// one segment costs `O(window²)` per sample (about 0.6 µs), and rays at 84° from the normal
+/// must still cross within [`MarchSettings::max_points`] (1e5) samples.
+pub const GPIS_MAX_BAND_SAMPLES: f64 = 1e4;
+
+/// Refuses gpis parameters whose march would take more than [`GPIS_MAX_BAND_SAMPLES`] samples to
+/// cross the band at normal incidence: `2kσ/Δt` with the step `Δt = l sqrt(−2 ln ρ)` along the
+/// roughest axis, `l = √2 σ/α_max` (seeds/000 Eq. 4), capped at `σ` (issue 9 item 13: `α = 1e5`
+/// took over 20 s for 16² pixels).
+fn check_march_length(settings: &MarchSettings, alpha: [f64; 3]) -> Result<()> {
+    let alpha_max = alpha.iter().copied().fold(0.0, f64::max);
+    let step_over_sigma = (std::f64::consts::SQRT_2 / alpha_max * (-2.0 * settings.step_correlation.ln()).sqrt()).min(settings.max_step);
+    let samples = 2.0 * settings.envelope / step_over_sigma;
+    if samples <= GPIS_MAX_BAND_SAMPLES {
+        Ok(())
+    } else {
+        Err(Error::new(ErrorKind::InvalidValue, format!(
+            "a gpis march across the band of \"shell_extent\" = {} sigma would take {samples:.3e} samples (largest roughness {alpha_max:e}, \
+             \"step_correlation\" = {}), more than {GPIS_MAX_BAND_SAMPLES:e}: lower the roughness (or raise the lengthscales), \
+             \"shell_extent\" or \"step_correlation\"",
+            settings.envelope, settings.step_correlation
+        )))
+    }
+}
+
+/// `sigma` from `sigma` or `variance` (exactly one), within [`crate::limits::SIGMA_RANGE`].
 fn read_sigma(r: &Reader) -> Result<f64> {
     match (r.float("sigma")?, r.float("variance")?) {
-        (Some(s), None) => check_positive("sigma", s, false),
-        (None, Some(v)) => Ok(check_positive("variance", v, false)?.sqrt()),
+        (Some(s), None) => check_sigma("parameter \"sigma\"", check_positive("sigma", s, false)?),
+        (None, Some(v)) => check_sigma("sigma = sqrt(\"variance\")", check_positive("variance", v, false)?.sqrt()),
         (Some(_), Some(_)) => Err(missing("give either \"sigma\" or \"variance\", not both".into())),
         (None, None) => Err(missing("\"sigma\" (or \"variance\") is required".into())),
     }
@@ -304,9 +331,14 @@ fn read_roughness(r: &Reader, sigma: f64, with_z: bool) -> Result<[f64; 3]> {
     // Checked here so that the message names the parameter as given (alpha_z may be 0).
     let to_alpha = |name: &str, v: f64| -> Result<f64> {
         if uses_kernel {
-            Ok(alpha_from_kernel(sigma, check_positive(name, v, false)?))
+            let alpha = alpha_from_kernel(sigma, check_positive(name, v, false)?);
+            let subject = format!("the roughness sqrt(2) sigma / \"{name}\" (with \"{name}\" = {v:e})");
+            let check = if name == "lengthscale_z" { check_alpha_z } else { check_roughness };
+            check(&subject, alpha)
         } else {
-            check_positive(name, v, name == "alpha_z")
+            let subject = format!("parameter \"{name}\"");
+            // "alpha" also sets alpha_z (an isotropic kernel): within both ranges then.
+            if name == "alpha_z" { check_alpha_z(&subject, v) } else { check_roughness(&subject, v) }
         }
     };
     let read = |i: usize| -> Result<Option<f64>> { r.float(names[i])?.map(|v| to_alpha(names[i], v)).transpose() };

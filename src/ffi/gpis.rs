@@ -17,7 +17,6 @@ use crate::gpis::{GpisSurface, MeanSdf, StartState, Trace};
 use crate::params::gpis_from_params;
 use crate::stats::Pcg32;
 use glam::DVec3;
-use std::cell::Cell;
 use std::ffi::c_void;
 
 /// [`mf_gpis_start::kind`]: the segment starts in free space (camera or light ray): the origin
@@ -67,24 +66,23 @@ pub struct mf_gpis {
     inner: GpisSurface,
 }
 
-/// Adapts the host callback to [`MeanSdf`], remembering a non-finite answer.
+/// Adapts the host callback to [`MeanSdf`]. A non-finite answer is passed on as NaN: the march
+/// stops at the first one ([`Trace::InvalidMean`]).
 struct CallbackMean {
     sdf: unsafe extern "C" fn(*mut c_void, mf_vec3, *mut mf_sdf_sample),
     user_data: *mut c_void,
-    failed: Cell<bool>,
 }
 
 impl CallbackMean {
     fn eval(&self, p: DVec3) -> (f64, DVec3) {
-        let mut s = mf_sdf_sample { f: f64::NAN, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 } };
+        let mut s = mf_sdf_sample { f: f64::NAN, gradient: mf_vec3 { x: f64::NAN, y: f64::NAN, z: f64::NAN } };
         // SAFETY: the host promised a callable function; it writes one mf_sdf_sample.
         unsafe { (self.sdf)(self.user_data, p.into(), &mut s) };
         let g = DVec3::from(s.gradient);
         if s.f.is_finite() && g.is_finite() {
             (s.f, g)
         } else {
-            self.failed.set(true);
-            (f64::MAX, DVec3::Z) // far outside: ends the march; the call then reports the failure
+            (f64::NAN, DVec3::NAN)
         }
     }
 }
@@ -106,6 +104,9 @@ fn invalid(message: String) -> FfiError {
 /// `shell_extent` = half-width of the sampled band in σ, default 6, `distribution` gpss |
 /// beckmann, `alpha*`, `lengthscale*`, `material`, `eta`, `k`, `specular_reflectance`) plus
 /// `memory` (renewal | renewal_plus, default renewal_plus) and `step_correlation` (default 0.95).
+/// The medium's domain applies, and the march is bounded: parameters whose march across the band
+/// at normal incidence would take more than 1e4 samples (`alpha` above about 377 at the defaults)
+/// are refused, naming what to change.
 ///
 /// # Safety
 /// `params` must be a live handle (or NULL); `out_gpis` NULL or valid for writes.
@@ -147,6 +148,13 @@ pub unsafe extern "C" fn mf_gpis_envelope(gpis: *const mf_gpis, out_envelope: *m
 /// Realizes the GPIS along `origin + t d`, `0 < t <= t_max` (+inf allowed), and returns its first
 /// entering crossing. `sdf(user_data, p, out)` supplies the mean; `seed` the random stream.
 ///
+/// An on-surface start whose realization enters at once (Renewal forgets the slope at the start;
+/// with Renewal+ a direction into the remembered surface, e.g. a shadow ray) reports its crossing
+/// at a small `t > 0` (at most 2^-16 of a march step). A NaN or infinite answer of `sdf` ends the
+/// call with `MF_ERROR_INVALID_ARGUMENT` at most 5 calls after it; with `memory = renewal_plus`,
+/// `start.gradient` must lie within 40 standard deviations of the prior slope at `origin` (any
+/// gradient a previous `mf_gpis_hit` returned does) and is checked before the march.
+///
 /// # Safety
 /// Pointers must be NULL or valid; `sdf` must be safe to call with `user_data` from this thread.
 #[no_mangle]
@@ -173,6 +181,8 @@ pub unsafe extern "C" fn mf_gpis_trace(
         if !(t_max > 0.0) {
             return Err(invalid(format!("t_max must be > 0 (or +inf), got {t_max}")));
         }
+        let slot = out(out_hit, "out_hit")?;
+        let mean = CallbackMean { sdf, user_data };
         let state = match start.kind {
             MF_GPIS_START_FREE => StartState::Uncorrelated,
             MF_GPIS_START_ON_SURFACE => {
@@ -180,21 +190,22 @@ pub unsafe extern "C" fn mf_gpis_trace(
                 if !grad.is_finite() {
                     return Err(invalid(format!("start.gradient must be finite, got {grad}")));
                 }
+                if g.inner.memory == crate::gpis::Memory::RenewalPlus {
+                    g.inner.check_start_gradient(&mean, origin, grad)?;
+                }
                 StartState::OnSurface { gradient: (g.inner.memory == crate::gpis::Memory::RenewalPlus).then_some(grad) }
             }
             other => return Err(invalid(format!("start.kind must be MF_GPIS_START_FREE or MF_GPIS_START_ON_SURFACE, got {other}"))),
         };
-        let slot = out(out_hit, "out_hit")?;
-        let mean = CallbackMean { sdf, user_data, failed: Cell::new(false) };
         let mut rng = Pcg32::new(seed, 0x6d66_6770_6973); // "mfgpis"
         let trace = g.inner.trace(&mean, origin, d, t_max, &state, &mut || rng.next_f64());
-        if mean.failed.get() {
-            return Err(invalid("the sdf callback returned a NaN or infinite value".into()));
-        }
         let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
         *slot = match trace {
             Trace::Hit(c) => mf_gpis_hit { hit: true, t: c.t, point: c.point.into(), normal: c.normal.into(), gradient: c.gradient.into() },
             Trace::Miss | Trace::Exhausted { .. } => mf_gpis_hit { hit: false, t: 0.0, point: zero, normal: zero, gradient: zero },
+            Trace::InvalidMean { point } => {
+                return Err(invalid(format!("the sdf callback returned a NaN or infinite value or gradient at {point}")))
+            }
         };
         Ok(())
     })

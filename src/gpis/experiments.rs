@@ -14,7 +14,8 @@ pub struct TransmittanceEstimate {
     pub transmittance: Vec<f64>,
     /// Binomial standard error `√(T(1−T)/N)` of each value.
     pub standard_error: Vec<f64>,
-    /// Realizations whose march was exhausted (counted as not crossed); 0 in normal use.
+    /// Realizations whose march was exhausted or met a non-finite mean (counted as not
+    /// crossed); 0 in normal use.
     pub exhausted: usize,
 }
 
@@ -37,7 +38,7 @@ pub fn transmittance_curve<M: MeanSdf>(
         let t_hit = match tracer.trace(origin, d, t_max, &StartState::Uncorrelated, uniform) {
             Trace::Hit(c) => c.t,
             Trace::Miss => f64::INFINITY,
-            Trace::Exhausted { .. } => {
+            Trace::Exhausted { .. } | Trace::InvalidMean { .. } => {
                 exhausted += 1;
                 f64::INFINITY
             }
@@ -75,7 +76,7 @@ pub fn visible_normals<M: MeanSdf>(
 pub enum GpisWalk {
     /// Left along `wo` (pointing away from the surface) after `bounces` reflections.
     Escaped { wo: DVec3, bounces: u32 },
-    /// Hit the bounce cap, or a march was exhausted.
+    /// Hit the bounce cap, or a march was exhausted or met a non-finite mean.
     Lost { bounces: u32 },
 }
 
@@ -98,7 +99,7 @@ pub fn mirror_random_walk<M: MeanSdf>(
         let c: Crossing = match tracer.trace(o, d, f64::INFINITY, &state, uniform) {
             Trace::Hit(c) => c,
             Trace::Miss => return GpisWalk::Escaped { wo: d, bounces },
-            Trace::Exhausted { .. } => return GpisWalk::Lost { bounces },
+            Trace::Exhausted { .. } | Trace::InvalidMean { .. } => return GpisWalk::Lost { bounces },
         };
         if bounces == max_bounces {
             break;

@@ -111,6 +111,11 @@ pub const STEP_CORRELATION: f64 = 0.95;
 pub const DEFAULT_WINDOW: usize = 64;
 /// Default relative nugget of every Cholesky factorisation ([`linalg`]).
 pub const DEFAULT_JITTER: f64 = 1e-9;
+/// Further bisection levels while a crossing's bracket still starts at an on-surface origin
+/// (`GpisTracer::locate`): 10 more halve the default bracket (`Δt/64 ≈ 0.005 l`) down to
+/// `≈ 5e-6 l`, where the difference between neighbouring values (`∝ t`) meets the noise of
+/// the `1e-9` relative nugget (`≈ 3e-5 σ`), so deeper samples would decide nothing.
+pub const EXTRA_START_LEVELS: u32 = 10;
 
 /// Which state of the last crossing the next segment remembers (seeds/004 Sec. 4.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -164,6 +169,9 @@ pub enum Trace {
     Miss,
     /// The march took [`MarchSettings::max_points`] samples without deciding (reached `t`).
     Exhausted { t: f64 },
+    /// The mean ([`MeanSdf`]) returned a NaN or infinite value or gradient at `point`; the
+    /// march stopped at the first such answer.
+    InvalidMean { point: DVec3 },
 }
 
 impl Trace {
@@ -428,10 +436,17 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
                 for _ in 0..10_000 {
                     let x = origin + t * d;
                     let m = self.mean.value(x);
+                    if !m.is_finite() {
+                        return Trace::InvalidMean { point: x };
+                    }
                     if !(m > env + 1e-3 * sigma) {
                         break;
                     }
-                    if d.dot(self.mean.gradient(x)) >= 0.0 {
+                    let grad = self.mean.gradient(x);
+                    if !grad.is_finite() {
+                        return Trace::InvalidMean { point: x };
+                    }
+                    if d.dot(grad) >= 0.0 {
                         return Trace::Miss;
                     }
                     t += m - env;
@@ -441,6 +456,9 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
                 }
                 let x = origin + t * d;
                 let m = self.mean.value(x);
+                if !m.is_finite() {
+                    return Trace::InvalidMean { point: x };
+                }
                 let f0 = if *start == StartState::Uncorrelated {
                     // Truncated to f > 0: z > a = −m/σ, by inverting the upper tail.
                     let a = -m / sigma;
@@ -458,7 +476,7 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
                 c.append(Functional::Value(x), f0, None);
                 if f0 <= 0.0 {
                     // Unconditioned start inside: the "crossing" is the origin itself.
-                    return Trace::Hit(self.sample_normal(&mut c, x, t, d, uniform));
+                    return self.sample_normal(&mut c, x, t, d, uniform);
                 }
                 f0
             }
@@ -470,13 +488,27 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
             }
             let t_next = (t + step).min(t_max);
             let x = origin + t_next * d;
-            if self.mean.value(x) > env && d.dot(self.mean.gradient(x)) >= 0.0 {
-                return Trace::Miss;
+            let mu = self.mean.value(x);
+            if !mu.is_finite() {
+                return Trace::InvalidMean { point: x };
+            }
+            if mu > env {
+                let grad = self.mean.gradient(x);
+                if !grad.is_finite() {
+                    return Trace::InvalidMean { point: x };
+                }
+                if d.dot(grad) >= 0.0 {
+                    return Trace::Miss;
+                }
             }
             c.evict_if_needed();
             let f = c.sample_value(x, uniform);
+            if !f.is_finite() {
+                // Only a non-finite conditioning value (e.g. a start gradient) gets here.
+                return Trace::InvalidMean { point: x };
+            }
             if f <= 0.0 {
-                return Trace::Hit(self.locate(&mut c, origin, d, (t, f_prev), (t_next, f), uniform));
+                return self.locate(&mut c, origin, d, (t, f_prev), (t_next, f), uniform);
             }
             t = t_next;
             f_prev = f;
@@ -489,6 +521,15 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
 
     /// Conditioned bisection of the bracket `a = (t_a, f_a ≥ 0)`, `b = (t_b, f_b ≤ 0)`, linear
     /// interpolation, then the normal.
+    ///
+    /// `f_a = 0` only at the start of an on-surface segment (the conditioning `f(o) = 0`) whose
+    /// realization is not positive anywhere in the first bracket: it enters at once (Renewal
+    /// forgets the slope at the start; a direction into the remembered surface does so with
+    /// Renewal+, e.g. a shadow ray). Interpolating from `(0, 0)` would report `t = 0`, which the
+    /// ABI promises never to do (issue 9 item 6). The bisection then goes on, at most
+    /// [`EXTRA_START_LEVELS`] levels deeper, while the left end is still the start, and if it
+    /// stays there the crossing is reported at the right end `t_b > 0`, the nearest point known
+    /// to be inside.
     fn locate(
         &self,
         c: &mut Conditioning<'a, M>,
@@ -497,19 +538,32 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
         a: (f64, f64),
         b: (f64, f64),
         uniform: &mut impl FnMut() -> f64,
-    ) -> Crossing {
+    ) -> Trace {
         let ((mut ta, mut fa), (mut tb, mut fb)) = (a, b);
-        for _ in 0..self.settings.bisection_levels {
+        let levels = self.settings.bisection_levels;
+        for level in 0..levels + EXTRA_START_LEVELS {
+            if level >= levels && fa != 0.0 {
+                break;
+            }
             let tm = 0.5 * (ta + tb);
+            if !(tm > ta && tm < tb) {
+                break; // no representable point left between the ends
+            }
             let p = origin + tm * d;
             let f = c.sample_value(p, uniform);
+            if !f.is_finite() {
+                return Trace::InvalidMean { point: p };
+            }
             if f > 0.0 {
                 (ta, fa) = (tm, f);
             } else {
                 (tb, fb) = (tm, f);
             }
         }
-        let tc = if fa - fb > 0.0 { ta + (tb - ta) * (fa / (fa - fb)).clamp(0.0, 1.0) } else { tb };
+        let interpolated = if fa - fb > 0.0 { ta + (tb - ta) * (fa / (fa - fb)).clamp(0.0, 1.0) } else { tb };
+        // `interpolated = 0` only from a left end at the start with `f_a = 0` (or one that
+        // underflows); see above.
+        let tc = if interpolated > 0.0 { interpolated } else { tb };
         let xc = origin + tc * d;
         c.append(Functional::Value(xc), 0.0, None);
         self.sample_normal(c, xc, tc, d, uniform)
@@ -517,7 +571,7 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
 
     /// Draws `∇f(xc)` given every observation, with `d · ∇f < 0` (truncated normal), and builds
     /// the crossing.
-    fn sample_normal(&self, c: &mut Conditioning<'a, M>, xc: DVec3, tc: f64, d: DVec3, uniform: &mut impl FnMut() -> f64) -> Crossing {
+    fn sample_normal(&self, c: &mut Conditioning<'a, M>, xc: DVec3, tc: f64, d: DVec3, uniform: &mut impl FnMut() -> f64) -> Trace {
         let targets = [Functional::Partial(xc, 0), Functional::Partial(xc, 1), Functional::Partial(xc, 2)];
         let (mean, cov) = c.predict(&targets);
         let m = DVec3::from_slice(&mean);
@@ -551,10 +605,14 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
             let mut normal = || standard_normal(uniform);
             DVec3::from_slice(&linalg::sample_psd(&mean, &cov, 3, &mut normal))
         };
+        if !g.is_finite() {
+            // The conditional law of the gradient uses the mean's gradient at `xc`.
+            return Trace::InvalidMean { point: xc };
+        }
         let mut n = g.try_normalize().unwrap_or(-d);
         if n.dot(d) > 0.0 {
             n = -n;
         }
-        Crossing { t: tc, point: xc, gradient: g, normal: n }
+        Trace::Hit(Crossing { t: tc, point: xc, gradient: g, normal: n })
     }
 }

@@ -4,10 +4,14 @@
 //! medium and the realization-based ground truth by changing only the type.
 
 use super::{GpisTracer, MarchSettings, MeanSdf, Memory, SeKernel, StartState, Trace};
+use crate::error::{Error, ErrorKind, Result};
 use crate::fresnel::fresnel_conductor_rgb;
 use crate::phase::{reflect, MicroBsdf};
 use crate::Rgb;
 use glam::DVec3;
+
+/// Bound of [`GpisSurface::check_start_gradient`], in standard deviations of the prior slope.
+pub const START_GRADIENT_DEVIATIONS: f64 = 40.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GpisSurface {
@@ -37,6 +41,35 @@ impl GpisSurface {
     ) -> Trace {
         let tracer = GpisTracer { mean, kernel: self.kernel, settings: self.settings };
         tracer.trace(origin, d, t_max, start, uniform)
+    }
+
+    /// Checks a Renewal+ start gradient before a march conditions on it: along every axis the
+    /// kernel varies (`l_i < ∞`), `g_i` must lie within [`START_GRADIENT_DEVIATIONS`] standard
+    /// deviations `σ/l_i = α_i/√2` (seeds/000 Eq. 4) of the mean's slope at the origin. A
+    /// crossing's sampled gradient always does (beyond 40 deviations a normal law has mass
+    /// below 1e-300); a gradient that does not — `DBL_MAX`, say — would make every conditioned
+    /// value meaningless (issue 9 item 12). One call to the mean.
+    pub fn check_start_gradient<M: MeanSdf>(&self, mean: &M, origin: DVec3, gradient: DVec3) -> Result<()> {
+        let invalid = |message: String| Err(Error::new(ErrorKind::InvalidArgument, message));
+        if !gradient.is_finite() {
+            return invalid(format!("start.gradient must be finite, got {gradient}"));
+        }
+        let slope = mean.gradient(origin);
+        if !slope.is_finite() {
+            return invalid(format!("the sdf callback returned a NaN or infinite gradient {slope} at the origin {origin}"));
+        }
+        let deviation = self.kernel.sigma * self.kernel.inverse_squared_lengths().map(f64::sqrt);
+        for i in 0..3 {
+            let z = (gradient[i] - slope[i]).abs() / deviation[i];
+            if deviation[i] > 0.0 && !(z <= START_GRADIENT_DEVIATIONS) {
+                return invalid(format!(
+                    "start.gradient component {i} = {} lies {z:.3e} standard deviations ({}) from the mean's slope {} at the \
+                     origin: no crossing of this process has that gradient (pass the gradient of the previous mf_gpis_hit)",
+                    gradient[i], deviation[i], slope[i]
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Specular reflection at a crossing with outward normal `n`; `wi` points away from the

@@ -28,7 +28,7 @@ pub struct HeightProfile {
 
 impl HeightProfile {
     /// `sigma` within [`crate::limits::SIGMA_RANGE`], `shell_extent` within
-    /// `(0, SHELL_EXTENT_MAX]`.
+    /// [`crate::limits::SHELL_EXTENT_RANGE`].
     pub fn new(sigma: f64, shell_extent: f64) -> Result<HeightProfile> {
         Ok(HeightProfile { sigma: check_sigma("parameter \"sigma\"", sigma)?, shell_extent: check_shell_extent(shell_extent)? })
     }

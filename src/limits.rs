@@ -10,10 +10,23 @@ use crate::error::{Error, ErrorKind, Result};
 /// Eq. 5–6), the flake density `|f|/σ²` deep inside (seeds/000 Eq. 13) — stay within 1e±216.
 pub const SIGMA_RANGE: (f64, f64) = (1e-50, 1e50);
 
-/// `shell_extent` `k` (the shell's top at `kσ`, the gpis band `±kσ`): above `f ≈ 38.6 σ` the flake
-/// density `φ/Φ` (seeds/000 Eq. 13) underflows to 0 and `Φ(−k)` below `1e-300`, so a larger `k`
-/// only adds empty space to march through.
-pub const SHELL_EXTENT_MAX: f64 = 40.0;
+/// `shell_extent` `k` of the medium (the shell's top at `kσ`). Above `f ≈ 38.6 σ` the flake
+/// density `φ/Φ` (seeds/000 Eq. 13) underflows to 0 and `Φ(−k)` falls below `1e-300`, so a larger
+/// `k` only adds empty space to march through; below 1e-6 the cut is the mean surface itself
+/// (`1 − Φ(k) = 0.5 − 4e-7`), and `kσ` stays a normal number for every `sigma` of the domain.
+pub const SHELL_EXTENT_RANGE: (f64, f64) = (1e-6, 40.0);
+
+/// `shell_extent` of a gpis: its band `±kσ`. The march starts sampling at `kσ` above the mean,
+/// where the process is already inside with probability `Φ(−k)`: 0.13 % at 3 (the medium's own
+/// default cut), 16 % at 1, so a smaller band is no ground truth.
+pub const GPIS_BAND_RANGE: (f64, f64) = (3.0, SHELL_EXTENT_RANGE.1);
+
+/// The conductor index `eta + i k` per channel. Measured metals have `0.03 < eta < 10` and
+/// `k < 20` (seeds: the presets of `fresnel.rs`); the closed-form Fresnel squares `eta² + k²`
+/// twice, which stays finite and accurate far beyond, up to 1e6.
+pub const ETA_RANGE: (f64, f64) = (1e-6, 1e6);
+/// See [`ETA_RANGE`]; `k = 0` (a dielectric-like index) is allowed.
+pub const K_RANGE: (f64, f64) = (0.0, 1e6);
 
 /// `alpha_u`, `alpha_v` (and `alpha_z` when not 0). A lobe narrower than 1e-6 rad is a mirror to
 /// any renderer (an `f32` unit direction resolves 6e-8 rad; the lobe's density `~1/α²` is then
@@ -47,15 +60,20 @@ pub(crate) fn check_sigma(subject: &str, sigma: f64) -> Result<f64> {
     check_range(subject, sigma, SIGMA_RANGE, "sigma^2 and 1/sigma^2 must stay far from the limits of f64")
 }
 
-/// `shell_extent` in `(0, SHELL_EXTENT_MAX]`.
+/// The medium's `shell_extent` within [`SHELL_EXTENT_RANGE`].
 pub(crate) fn check_shell_extent(k: f64) -> Result<f64> {
-    if k > 0.0 && k <= SHELL_EXTENT_MAX {
-        Ok(k)
-    } else {
-        Err(out_of_domain(format!(
-            "parameter \"shell_extent\" = {k:e} must lie in (0, {SHELL_EXTENT_MAX}]: above 38.6 sigma the flake density is 0 in f64"
-        )))
-    }
+    check_range("parameter \"shell_extent\"", k, SHELL_EXTENT_RANGE, "above 38.6 sigma the flake density is 0 in f64, below 1e-6 the top is the mean surface")
+}
+
+/// A gpis's `shell_extent` (its band) within [`GPIS_BAND_RANGE`].
+pub(crate) fn check_gpis_band(k: f64) -> Result<f64> {
+    check_range("parameter \"shell_extent\" (the gpis band)", k, GPIS_BAND_RANGE, "a narrower band misses the crossings above it")
+}
+
+/// One channel of a conductor's `eta` or `k` within [`ETA_RANGE`] / [`K_RANGE`].
+pub(crate) fn check_conductor_index(name: &str, channel: usize, value: f64) -> Result<f64> {
+    let range = if name == "eta" { ETA_RANGE } else { K_RANGE };
+    check_range(&format!("parameter \"{name}\" (channel {channel})"), value, range, "metals have 0.03 < eta < 10 and k < 20")
 }
 
 /// A roughness `alpha_u` / `alpha_v` within [`ROUGHNESS_RANGE`]; `subject` as in [`check_range`].

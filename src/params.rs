@@ -23,7 +23,7 @@ use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
 use crate::gpis::{GpisSurface, MarchSettings, Memory, SeKernel};
 use crate::height::{HeightProfile, DEFAULT_SHELL_EXTENT};
-use crate::limits::{check_alpha_z, check_roughness, check_shell_extent, check_sigma};
+use crate::limits::{check_alpha_z, check_conductor_index, check_gpis_band, check_roughness, check_sigma};
 use crate::medium::MacrofacetMedium;
 use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Ndf};
 use crate::phase::{MacrofacetPhase, MicroBsdf, VndfSampling};
@@ -245,7 +245,7 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
     let sigma = read_sigma(&r)?;
     let mut settings = MarchSettings::default();
     if let Some(k) = r.float("shell_extent")? {
-        settings.envelope = check_shell_extent(k)?;
+        settings.envelope = check_gpis_band(k)?;
     }
     if let Some(rho) = r.float("step_correlation")? {
         if !(rho > 0.0 && rho < 1.0) {
@@ -380,9 +380,9 @@ fn read_conductor(r: &Reader) -> Result<MicroBsdf> {
             Ok(MicroBsdf::Conductor { eta: preset.eta, k: preset.k, specular_reflectance })
         }
         (None, Some(eta), Some(k)) => {
-            for (c, e) in eta.iter().enumerate() {
-                check_positive("eta", *e, false).map_err(|_| Error::new(ErrorKind::InvalidValue,
-                    format!("parameter \"eta\" must be > 0 in every channel, channel {c} is {e}")))?;
+            for c in 0..3 {
+                check_conductor_index("eta", c, eta[c])?;
+                check_conductor_index("k", c, k[c])?;
             }
             Ok(MicroBsdf::Conductor { eta, k, specular_reflectance })
         }

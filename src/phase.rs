@@ -105,7 +105,13 @@ impl MacrofacetPhase {
             MicroBsdf::Diffuse { .. } => self.diffuse_lobe_integral(wi, wo),
             _ => {
                 let Some((m, cos)) = half_vector(wi, wo) else { return 0.0 };
-                self.pdf_normal(wi, m) / (4.0 * cos)
+                match self.sampling {
+                    // D_wi(m) / (4 wi·m) (Eq. 12 and the reflection's Jacobian) with wi·m
+                    // cancelled: forming wi·m D(m) first underflows for grazing m, where the
+                    // result is an ordinary number (found by fuzzing: eval/pdf off by 1e-3).
+                    VndfSampling::Exact => self.ndf.visible_area(wi).map_or(0.0, |area| self.ndf.d(m) / (4.0 * area)),
+                    VndfSampling::Mixture(mix) => mix.pdf(wi, m) / (4.0 * cos),
+                }
             }
         }
     }
@@ -141,7 +147,10 @@ impl MacrofacetPhase {
     /// The [`PhaseSample`] of a direction `wo` from [`Self::sample_direction`]: `pdf` is
     /// [`Self::pdf`]`(wi, wo)` bit for bit and `weight` is `eval(wi, wo) / pdf` (for diffuse
     /// flakes exactly the albedo, for exact sampling exactly the flake's Fresnel reflectance).
-    /// `None` when that density is 0 (only for degenerate input).
+    /// `None` when that density is below the smallest normal `f64` (then it and `eval` have lost
+    /// their precision, and `eval / pdf` is noise; such directions have a total probability below
+    /// `4π · 2.2e-308`) or overflows (the Eq. 40 mixture's density diverges like `1/(wi·m)` as `wo`
+    /// turns back onto `-wi`; its weight `eval/pdf` is 0 there, so no estimate changes).
     ///
     /// Everything is evaluated at `wo`, not at the normal it was sampled with: the half vector
     /// of `wo` differs from that normal by rounding (~1e-16), which changes `D` by up to 1e-6
@@ -150,7 +159,7 @@ impl MacrofacetPhase {
     /// its own round trip (the C ABI does), so that the pdf it later queries is this one.
     pub fn sample_record(&self, wi: DVec3, wo: DVec3) -> Option<PhaseSample> {
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) {
+        if !(pdf >= f64::MIN_POSITIVE && pdf.is_finite()) {
             return None;
         }
         let weight = match self.micro_bsdf {
@@ -162,14 +171,6 @@ impl MacrofacetPhase {
             },
         };
         Some(PhaseSample { wo, weight, pdf })
-    }
-
-    /// Density of the normal sampler in use, per solid angle of `m`.
-    fn pdf_normal(&self, wi: DVec3, m: DVec3) -> f64 {
-        match self.sampling {
-            VndfSampling::Exact => self.ndf.pdf_visible(wi, m),
-            VndfSampling::Mixture(mix) => mix.pdf(wi, m),
-        }
     }
 
     /// `∫ D_wi(m) <wo, m> / π dm`, the diffuse-flake phase function without its albedo,

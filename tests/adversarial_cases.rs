@@ -276,7 +276,7 @@ fn medium_error(pairs: &[(&str, f64)]) -> String {
     let medium = medium_from_params(&params).err();
     let gpis = gpis_from_params(&params).err();
     let (Some(m), Some(g)) = (medium, gpis) else { panic!("{pairs:?} must be refused by the medium and by gpis") };
-    assert_eq!(m.message, g.message, "{pairs:?}: one message for both");
+    assert!(g.message.contains(&m.message[..m.message.find(" = ").unwrap()]), "{pairs:?}: {} / {}", m.message, g.message);
     m.message
 }
 
@@ -284,11 +284,12 @@ fn medium_error(pairs: &[(&str, f64)]) -> String {
 /// the range of `f64` are refused, naming the parameter and the reason.
 #[test]
 fn item8_parameters_with_overflowing_derived_quantities_are_refused() {
-    let cases: [(&[(&str, f64)], &str); 8] = [
+    let cases: [(&[(&str, f64)], &str); 9] = [
         (&[("sigma", 1e308), ("alpha", 0.3)], "\"sigma\" = 1e308"),
         (&[("sigma", 1e-60), ("alpha", 0.3)], "\"sigma\" = 1e-60"),
         (&[("variance", 1e300), ("alpha", 0.3)], "\"variance\""),
         (&[("sigma", 1.0), ("alpha", 0.3), ("shell_extent", 1e300)], "\"shell_extent\""),
+        (&[("sigma", 1e-50), ("alpha", 0.3), ("shell_extent", 1e-300)], "\"shell_extent\""),
         (&[("sigma", 1.0), ("alpha", 1e-7)], "\"alpha\""),
         (&[("sigma", 1.0), ("alpha", 1e7)], "\"alpha\""),
         (&[("sigma", 1.0), ("alpha_u", 0.3), ("alpha_v", 0.3), ("alpha_z", 1e-20)], "\"alpha_z\""),
@@ -296,12 +297,26 @@ fn item8_parameters_with_overflowing_derived_quantities_are_refused() {
     ];
     for (pairs, named) in cases {
         let message = medium_error(pairs);
-        assert!(message.contains(named) && (message.contains("outside") || message.contains("must lie in")), "{pairs:?}: {message}");
+        assert!(message.contains(named) && message.contains("outside"), "{pairs:?}: {message}");
     }
+    // A conductor index whose Fresnel squares overflow (the fuzz target's first NaN).
+    let mut params = ParamSet::new();
+    params.set_float("sigma", 3.0).set_float("lengthscale", 0.1175).set_rgb("eta", [3.0, f64::MAX, 10.0]).set_rgb("k", [31.6; 3]);
+    let message = medium_from_params(&params).unwrap_err().message;
+    assert!(message.contains("\"eta\" (channel 1)"), "{message}");
+    for (eta, k) in [(1e6, 1e6), (1e-6, 0.0), (1e-6, 1e6), (1e6, 0.0)] {
+        for cos in [0.0, 1e-300, 0.3, 1.0] {
+            let f = macrofacet::fresnel::fresnel_conductor(cos, eta, k);
+            assert!((0.0..=1.0).contains(&f), "Fresnel({cos}, {eta}, {k}) = {f}");
+        }
+    }
+    // A gpis band too narrow to be a ground truth.
+    let message = medium_gpis_error(&[("sigma", 1.0), ("alpha", 0.3), ("shell_extent", 2.0)]);
+    assert!(message.contains("gpis band") && message.contains("outside"), "{message}");
     // The edges of the domain are accepted and give finite answers.
     for pairs in [
         [("sigma", 1e50), ("alpha", 1e6), ("shell_extent", 40.0)],
-        [("sigma", 1e-50), ("alpha", 1e-6), ("shell_extent", 1e-300)],
+        [("sigma", 1e-50), ("alpha", 1e-6), ("shell_extent", 1e-6)],
     ] {
         let mut params = ParamSet::new();
         for (name, value) in pairs {
@@ -370,3 +385,92 @@ fn medium_gpis_error(pairs: &[(&str, f64)]) -> String {
     }
     gpis_from_params(&params).unwrap_err().message
 }
+
+/// Found by fuzzing (`fuzz/`, target `params` and `phase`): samples from the very end of the
+/// visible-normal distribution (`u[0] → 0`: `wi·m → 0`) had `pdf` formed through `wi·m D(m)`,
+/// which underflows, so `weight ≠ eval/pdf` by up to 1e-3 — and a subnormal `pdf` made it noise.
+/// gpss α = 0.0369 with copper flakes, seen from the normal and from 83.5°.
+#[test]
+fn fuzz_grazing_visible_normals_keep_weight_equal_to_eval_over_pdf() {
+    let mut params = ParamSet::new();
+    params.set_float("sigma", 1e50).set_float("alpha", 3.688588901449696e-2).set_string("material", "Cu");
+    let phase = medium_from_params(&params).unwrap().phase;
+    let tiny = [0.0, 5e-324, 1e-300, 1e-200, 1e-100, 1e-50, 1e-20, 1e-10];
+    let mut valid = 0;
+    for wi in [DVec3::Z, DVec3::new(-0.9307737412304455, 0.3474575593011919, 0.11372549019607847).normalize()] {
+        for u0 in tiny {
+            for u1 in [0.0, 0.25, 0.5, 0.9] {
+                for u2 in [0.0, 0.3, 0.7] {
+                    let Some(s) = phase.sample(wi, [u0, u1, u2, 0.0, 0.0]) else { continue };
+                    valid += 1;
+                    assert!(s.pdf >= f64::MIN_POSITIVE && s.pdf.to_bits() == phase.pdf(wi, s.wo).to_bits(), "wi {wi}, u0 {u0}: {s:?}");
+                    let eval = phase.eval(wi, s.wo);
+                    for c in 0..3 {
+                        assert!(relative(s.weight[c], eval[c] / s.pdf) < 1e-12, "wi {wi}, u {u0} {u1} {u2}: weight {:?}, eval/pdf {}", s.weight, eval[c] / s.pdf);
+                    }
+                }
+            }
+        }
+    }
+    assert!(valid > 50, "{valid} valid samples");
+}
+
+/// Found by fuzzing (target `params`): a conductor of index `eta = 1, k = 0` (no interface) had a
+/// reflectance of −4.6e-17 from the cancelling difference form, and with it a negative weight.
+#[test]
+fn fuzz_fresnel_reflectance_stays_in_the_unit_interval() {
+    use macrofacet::fresnel::fresnel_conductor;
+    for (eta, k) in [(1.0, 0.0), (1.0, 1e-3), (1.0000000002018387, 0.0), (1e-6, 0.0), (1e6, 1e6), (0.5, 0.0), (2.0, 0.0)] {
+        for i in 0..=1000 {
+            let cos = i as f64 / 1000.0;
+            let f = fresnel_conductor(cos, eta, k);
+            assert!((0.0..=1.0).contains(&f), "F({cos}, {eta}, {k}) = {f}");
+        }
+    }
+    assert!(fresnel_conductor(0.3, 1.0, 0.0) < 1e-30, "eta = 1: no interface");
+    // The fuzz case: gpss height field with Eq. 40 sampling, eta = (1, 1, 0.01), k = (0, 10.2, 1e-3).
+    let mut params = ParamSet::new();
+    params.set_float("variance", 3.874675120456049e10).set_float("shell_extent", 0.3495).set_float("alpha_u", 4.318).set_float("alpha_v", 4.318);
+    params.set_float("alpha_z", 0.0).set_rgb("eta", [1.0, 1.0, 0.01]).set_rgb("k", [0.0, 10.2, 1.0256e-3]);
+    params.set_string("vndf_sampling", "mixture").set_float("mixture_ratio", 3.6517412725447255e-6);
+    let phase = medium_from_params(&params).unwrap().phase;
+    let mut rng = Pcg32::new(4, 6);
+    for _ in 0..20_000 {
+        let wi = direction(&mut rng, false);
+        if let Some(s) = phase.sample(wi, u5(&mut rng)) {
+            assert!(s.weight.iter().all(|w| *w >= 0.0 && w.is_finite()), "wi {wi}: {s:?}");
+        }
+    }
+}
+
+/// A mean that is no signed distance: a constant far inside.
+struct ConstantMean(f64);
+
+impl MeanSdf for ConstantMean {
+    fn value(&self, _p: DVec3) -> f64 {
+        self.0
+    }
+    fn gradient(&self, _p: DVec3) -> DVec3 {
+        DVec3::new(0.0, 0.0, 1e-16)
+    }
+}
+
+/// Found by fuzzing (target `gpis`): a free start where the mean is 5e8 σ inside drew its
+/// conditioned value `f(o) > 0` as `m + σ z`, which rounds to ≤ 0, and reported a hit at t = 0.
+#[test]
+fn fuzz_free_start_deep_inside_hits_at_positive_t() {
+    let mut params = ParamSet::new();
+    params.set_float("sigma", 1.936285764540805e-8).set_float("alpha", 10.0).set_string("memory", "renewal").set_float("step_correlation", 0.999);
+    let g = gpis_from_params(&params).unwrap();
+    let mean = ConstantMean(-9.9794145972893);
+    let origin = DVec3::new(-4.857496975429136e-8, -7.846958366760742e-9, -2.5117410024212405e-9);
+    let d = DVec3::new(-0.1494087068867229, 0.9758640322680162, -0.15926841755993526).normalize();
+    for seed in 0..200u64 {
+        let mut rng = Pcg32::new(seed, 0x6d66_6770_6973);
+        match g.trace(&mean, origin, d, f64::INFINITY, &StartState::Uncorrelated, &mut || rng.next_f64()) {
+            Trace::Hit(c) => assert!(c.t > 0.0 && c.t.is_finite(), "seed {seed}: t = {}", c.t),
+            other => panic!("seed {seed}: {other:?}"),
+        }
+    }
+}
+

@@ -596,3 +596,56 @@ fn issue9_gpis_cases_through_the_abi() {
     assert!(last_error().contains("start.gradient") && state.0 == 1, "{} calls: {}", state.0, last_error());
     unsafe { mf_gpis_free(gpis) };
 }
+
+/// Found by fuzzing (target `phase`): the Eq. 40 mixture at grazing incidence (a frame normal of
+/// length 1e308, now accepted) with `u = 0` samples a normal at `wi·m ≈ 1e-310`, whose density
+/// `(1 − R)/(2π · 4 wi·m)` overflows: a valid sample had `pdf = inf`. Such a sample has weight 0
+/// and is not returned.
+#[test]
+fn fuzz_mixture_samples_with_overflowing_pdf_are_not_returned() {
+    let m = ffi_medium(&[("sigma", 3.0), ("lengthscale", 1.000000000001e4), ("mixture_ratio", 8.499862859600035e-5)], &[("vndf_sampling", "mixture")]);
+    let frame = mf_frame {
+        normal: mf_vec3 { x: 1e-6, y: -9.999999999997382e307, z: -3.255287074942678e-82 },
+        tangent: mf_vec3 { x: 1e-6, y: -9.999999999997382e307, z: -3.255287074942678e-82 },
+    };
+    let wi = DVec3::new(2.2609712140232665e-5, 0.0, 0.9999999997444005);
+    let s = ffi_sample(m, &frame, wi, [0.0; MF_PHASE_SAMPLE_DIMENSIONS]);
+    assert!(!s.valid || (s.pdf.is_finite() && s.pdf > 0.0), "{s:?}");
+    unsafe { mf_medium_free(m) };
+}
+
+/// The fuzz target's plane (`normal . p - offset`), answering NaN from call `good + 1` on: in the
+/// value on even calls, in the gradient's y on odd ones.
+unsafe extern "C" fn alternating_nan_plane(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_sdf_sample) {
+    let state = &mut *(user_data as *mut (usize, usize));
+    state.0 += 1;
+    let n = DVec3::new(0.9099771102496692, -0.04040297035089292, -0.41268542354738713);
+    let (mut f, mut g) = (n.dot(dv(p)) + 5.999908447265615e50, n);
+    if state.0 > state.1 {
+        if state.0 % 2 == 0 {
+            f = f64::NAN;
+        } else {
+            g.y = f64::NAN;
+        }
+    }
+    *out = mf_sdf_sample { f, gradient: v(g) };
+}
+
+/// Found by fuzzing (target `gpis`): a NaN that reached the march only as the prior mean of a
+/// conditioning value (the origin's, with the ray then ending at `t_max`) was ignored: MF_OK.
+#[test]
+fn fuzz_a_nan_mean_anywhere_fails_the_trace() {
+    let gpis = ffi_gpis(&[("sigma", 1e50), ("alpha", 10.0)], "renewal").unwrap();
+    let origin = DVec3::new(2.5941180484075706e47, -1.1522552036897194e46, 6.177765775644404e47);
+    let start = mf_gpis_start { kind: MF_GPIS_START_FREE, gradient: v(DVec3::ZERO) };
+    let mut state = (0usize, 5usize);
+    let hit_sentinel = mf_gpis_hit { hit: true, t: -7.0, point: v(DVec3::ONE), normal: v(DVec3::ONE), gradient: v(DVec3::ONE) };
+    let mut hit = hit_sentinel;
+    let status = unsafe {
+        mf_gpis_trace(gpis, Some(alternating_nan_plane), &mut state as *mut (usize, usize) as *mut _, v(origin), v(DVec3::Y), 9.858706006832666, &start, 970143228277, &mut hit)
+    };
+    assert!(state.0 > 5, "the callback must have answered NaN ({} calls)", state.0);
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT, "{hit:?}");
+    assert_eq!(hit, hit_sentinel);
+    unsafe { mf_gpis_free(gpis) };
+}

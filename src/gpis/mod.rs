@@ -102,6 +102,7 @@ pub use mean::{MeanSdf, Plane, Sphere};
 
 use crate::special::{ln_normal_cdf, probit, probit_of_ln};
 use glam::DVec3;
+use std::cell::Cell;
 
 /// The correlation between successive samples along a ray, `k(x, x+Δt d)/k(x, x)` (Sec. 4.2.1
 /// of seeds/004 spaces samples "appropriately for the given covariance function"; 0.95 gives
@@ -249,14 +250,22 @@ struct Conditioning<'t, M: MeanSdf> {
     obs: Vec<(Functional, f64)>,
     l: Vec<Vec<f64>>,
     alpha: Vec<f64>,
+    /// Where the mean first answered NaN or infinity, if it did.
+    invalid_mean: Cell<Option<DVec3>>,
 }
 
 impl<'t, M: MeanSdf> Conditioning<'t, M> {
+    /// The mean of `a`; a non-finite answer of the mean is remembered in `invalid_mean` (the
+    /// march ends with [`Trace::InvalidMean`]).
     fn prior_mean(&self, a: &Functional) -> f64 {
-        match *a {
+        let value = match *a {
             Functional::Value(p) => self.mean.value(p),
             Functional::Partial(p, i) => self.mean.gradient(p)[i],
+        };
+        if !value.is_finite() && self.invalid_mean.get().is_none() {
+            self.invalid_mean.set(Some(a.point()));
         }
+        value
     }
 
     /// Variance of a functional plus its nugget (the diagonal entry of the factored matrix).
@@ -382,6 +391,7 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
             obs: Vec::new(),
             l: Vec::new(),
             alpha: Vec::new(),
+            invalid_mean: Cell::new(None),
         };
         if let StartState::OnSurface { gradient } = *start {
             c.observe_memory(Functional::Value(origin), 0.0);
@@ -424,10 +434,21 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
         if !origin.is_finite() || t_max.is_nan() || !(t_max > 0.0) {
             return Trace::Miss;
         }
+        let mut c = self.conditioning(origin, start);
+        let trace = self.march(&mut c, origin, d, t_max, start, uniform);
+        // A non-finite mean met as a prior mean of the conditioning (the memory, a sample)
+        // overrides whatever the march concluded from it.
+        match c.invalid_mean.get() {
+            Some(point) => Trace::InvalidMean { point },
+            None => trace,
+        }
+    }
+
+    /// The body of [`Self::trace`] for a unit `d` and valid `origin`, `t_max`.
+    fn march(&self, c: &mut Conditioning<'a, M>, origin: DVec3, d: DVec3, t_max: f64, start: &StartState, uniform: &mut impl FnMut() -> f64) -> Trace {
         let sigma = self.kernel.sigma;
         let env = self.settings.envelope * sigma;
         let step = self.step(d);
-        let mut c = self.conditioning(origin, start);
         let mut t = 0.0;
         let mut f_prev = match *start {
             StartState::OnSurface { .. } => 0.0,
@@ -465,18 +486,19 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
                     let ln_tail = ln_normal_cdf(-a);
                     let v = 1.0 - uniform(); // (0, 1]
                     let zz = -probit_of_ln(v.ln() + ln_tail);
-                    if zz.is_finite() {
-                        m + sigma * zz.max(a)
-                    } else {
-                        m.max(0.0) + f64::MIN_POSITIVE
-                    }
+                    // f = m + σ z > 0 for z > a, but with the mean far inside (m ≪ −σ) the excess
+                    // σ (z − a) ~ σ/a lies below the rounding of m and the sum can come out ≤ 0
+                    // (found by fuzzing: a free start reported a hit at t = 0); the smallest
+                    // positive value is then the truncated sample as f64 resolves it.
+                    let f = if zz.is_finite() { m + sigma * zz.max(a) } else { m.max(0.0) };
+                    f.max(f64::MIN_POSITIVE)
                 } else {
                     m + sigma * standard_normal(uniform)
                 };
                 c.append(Functional::Value(x), f0, None);
                 if f0 <= 0.0 {
                     // Unconditioned start inside: the "crossing" is the origin itself.
-                    return self.sample_normal(&mut c, x, t, d, uniform);
+                    return self.sample_normal(c, x, t, d, uniform);
                 }
                 f0
             }
@@ -503,12 +525,11 @@ impl<'a, M: MeanSdf> GpisTracer<'a, M> {
             }
             c.evict_if_needed();
             let f = c.sample_value(x, uniform);
-            if !f.is_finite() {
-                // Only a non-finite conditioning value (e.g. a start gradient) gets here.
+            if !f.is_finite() || c.invalid_mean.get().is_some() {
                 return Trace::InvalidMean { point: x };
             }
             if f <= 0.0 {
-                return self.locate(&mut c, origin, d, (t, f_prev), (t_next, f), uniform);
+                return self.locate(c, origin, d, (t, f_prev), (t_next, f), uniform);
             }
             t = t_next;
             f_prev = f;

@@ -66,10 +66,12 @@ fn color(b: &mut Bytes) -> [f64; 3] {
     }
 }
 
-/// The roughness of a medium or gpis: one of the parameter forms, values mostly in the domain.
-fn roughness(b: &mut Bytes, params: &mut Vec<Param>, with_z: bool, largest_log10: f64) {
+/// The roughness of a medium or gpis of height deviation `sigma`: one of the parameter forms,
+/// values mostly in the domain (lengthscales mostly `√2 σ / α` for such an `α`).
+fn roughness(b: &mut Bytes, params: &mut Vec<Param>, sigma: f64, with_z: bool, largest_log10: f64) {
     let alpha = |b: &mut Bytes| b.positive(-6.0, largest_log10);
     let alpha_z = |b: &mut Bytes| if b.u8() % 3 == 0 { 0.0 } else { b.positive(-8.0, largest_log10) };
+    let length = |b: &mut Bytes| if b.u8() % 8 == 0 { b.positive(-4.0, 4.0) } else { std::f64::consts::SQRT_2 * sigma / alpha(b) };
     match b.u8() % 4 {
         0 => params.push(float("alpha", alpha(b))),
         1 => {
@@ -79,12 +81,12 @@ fn roughness(b: &mut Bytes, params: &mut Vec<Param>, with_z: bool, largest_log10
                 params.push(float("alpha_z", alpha_z(b)));
             }
         }
-        2 => params.push(float("lengthscale", b.positive(-4.0, 4.0))),
+        2 => params.push(float("lengthscale", length(b))),
         _ => {
-            params.push(float("lengthscale_x", b.positive(-4.0, 4.0)));
-            params.push(float("lengthscale_y", b.positive(-4.0, 4.0)));
+            params.push(float("lengthscale_x", length(b)));
+            params.push(float("lengthscale_y", length(b)));
             if with_z {
-                params.push(float("lengthscale_z", b.positive(-4.0, 4.0)));
+                params.push(float("lengthscale_z", length(b)));
             }
         }
     }
@@ -109,17 +111,21 @@ fn conductor(b: &mut Bytes, params: &mut Vec<Param>) {
 /// the query targets get a medium; the odd value outside it exercises the refusals.
 pub fn medium_params(b: &mut Bytes) -> Vec<Param> {
     let mut params = Vec::new();
-    if b.u8() % 8 == 0 {
-        params.push(float("variance", b.positive(-100.0, 100.0)));
+    let sigma = if b.u8() % 8 == 0 {
+        let variance = b.positive(-100.0, 100.0);
+        params.push(float("variance", variance));
+        variance.sqrt()
     } else {
-        params.push(float("sigma", b.positive(-50.0, 50.0)));
-    }
+        let sigma = b.positive(-50.0, 50.0);
+        params.push(float("sigma", sigma));
+        sigma
+    };
     if b.bool() {
         params.push(float("shell_extent", b.positive(-3.0, 1.6)));
     }
     let distribution = b.choose(&["gpss", "gpss", "beckmann", "ggx"]);
     params.push(string("distribution", distribution));
-    roughness(b, &mut params, distribution == "gpss", 6.0);
+    roughness(b, &mut params, sigma, distribution == "gpss", 6.0);
     if b.u8() % 4 == 0 {
         params.push(string("micro_bsdf", "diffuse"));
         params.push(rgb("reflectance", color(b)));
@@ -133,19 +139,23 @@ pub fn medium_params(b: &mut Bytes) -> Vec<Param> {
     params
 }
 
-/// A gpis's parameters: mostly valid, with roughness and band kept where a trace costs
-/// microseconds to milliseconds (the march bound refuses the rest).
+/// A gpis's parameters: mostly valid, with roughness, band and step kept where a trace costs
+/// tens of microseconds (one input in 16 may cost milliseconds: up to α = 10, ρ = 0.999), so that
+/// the target runs 1e7 inputs in hours (the march bound refuses what costs more).
 pub fn gpis_params(b: &mut Bytes) -> Vec<Param> {
-    let mut params = vec![float("sigma", b.positive(-50.0, 50.0))];
+    let sigma = b.positive(-50.0, 50.0);
+    let mut params = vec![float("sigma", sigma)];
     let height_field = b.u8() % 3 == 0;
     params.push(string("distribution", if height_field { "beckmann" } else { "gpss" }));
-    roughness(b, &mut params, !height_field, 1.0);
+    let expensive = b.u8() % 16 == 0;
+    roughness(b, &mut params, sigma, !height_field, if expensive { 1.0 } else { 0.0 });
     params.push(string("memory", b.choose(&["renewal", "renewal_plus"])));
     if b.u8() % 4 == 0 {
-        params.push(float("step_correlation", b.choose(&[0.5, 0.9, 0.95, 0.99, 0.999])));
+        let rho = if expensive { b.choose(&[0.99, 0.999]) } else { b.choose(&[0.5, 0.9, 0.95]) };
+        params.push(float("step_correlation", rho));
     }
     if b.u8() % 4 == 0 {
-        params.push(float("shell_extent", b.positive(-1.0, 1.0)));
+        params.push(float("shell_extent", if expensive { b.positive(0.4, 1.6) } else { b.positive(0.4, 0.9) }));
     }
     conductor(b, &mut params);
     params

@@ -4,6 +4,7 @@
 #   scripts/fuzz.sh [SECONDS] [TARGET...]   every target (or those named) for SECONDS each
 #                                           (default 60), one after another, under nice -n 19;
 #                                           prints the executions per target
+#   scripts/fuzz.sh --runs N [TARGET...]    the same for N inputs each instead
 #   scripts/fuzz.sh --smoke                 a bounded smoke: each target replays its committed
 #                                           seeds and runs a fixed number of inputs (used by
 #                                           scripts/test.sh); exits 2 when the nightly
@@ -28,9 +29,13 @@ declare -A BUILD_OPTIONS=([gpis]="--no-trace-compares --sanitizer none --target-
 
 smoke=0
 seconds=60
+runs=""
 if [ "${1:-}" = "--smoke" ]; then
     smoke=1
     shift
+elif [ "${1:-}" = "--runs" ]; then
+    runs="$2"
+    shift 2
 elif [ -n "${1:-}" ]; then
     seconds="$1"
     shift
@@ -62,7 +67,11 @@ for target in "${TARGETS[@]}"; do
         args=("$scratch" -- "-runs=$SMOKE_RUNS")
     else
         mkdir -p "$corpus"
-        args=("$corpus" -- "-max_total_time=$seconds")
+        if [ -n "$runs" ]; then
+            args=("$corpus" -- "-runs=$runs")
+        else
+            args=("$corpus" -- "-max_total_time=$seconds")
+        fi
     fi
     log="$(mktemp)"
     echo "== fuzz $target" >&2

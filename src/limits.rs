@@ -4,6 +4,7 @@
 //! top). The bounds are wide: each is where `f64` stops or where the medium stops changing.
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::gpis::MarchSettings;
 
 /// `sigma` (scene units). Products of up to four factors `σ^±1` and `α^±1` — the kernel's
 /// derivative covariances `σ² w_i w_j` with `w_i = α_i²/(2σ²)` (seeds/000 Eq. 4, seeds/004
@@ -87,4 +88,29 @@ pub(crate) fn check_alpha_z(subject: &str, alpha_z: f64) -> Result<f64> {
         return Ok(0.0);
     }
     check_range(subject, alpha_z, (ALPHA_Z_MIN, ROUGHNESS_RANGE.1), "give 0 for a height field (below 1e-8 the NDF is Beckmann's)")
+}
+
+/// Most samples a gpis march may take to cross its band `±kσ` along the normal: the march of
+/// one segment costs `O(window²)` per sample (about 0.6 µs), and rays at 84° from the normal
+/// must still cross within [`MarchSettings::max_points`] (1e5) samples.
+pub const GPIS_MAX_BAND_SAMPLES: f64 = 1e4;
+
+/// Refuses gpis parameters whose march would take more than [`GPIS_MAX_BAND_SAMPLES`] samples to
+/// cross the band at normal incidence: `2kσ/Δt` with the step `Δt = l sqrt(−2 ln ρ)` along the
+/// roughest axis, `l = √2 σ/α_max` (seeds/000 Eq. 4), capped at `σ` (issue 9 item 13: `α = 1e5`
+/// took over 20 s for 16² pixels).
+pub(crate) fn check_march_length(settings: &MarchSettings, alpha: [f64; 3]) -> Result<()> {
+    let alpha_max = alpha.iter().copied().fold(0.0, f64::max);
+    let step_over_sigma = (std::f64::consts::SQRT_2 / alpha_max * (-2.0 * settings.step_correlation.ln()).sqrt()).min(settings.max_step);
+    let samples = 2.0 * settings.envelope / step_over_sigma;
+    if samples <= GPIS_MAX_BAND_SAMPLES {
+        Ok(())
+    } else {
+        Err(out_of_domain(format!(
+            "a gpis march across the band of \"shell_extent\" = {} sigma would take {samples:.3e} samples (largest roughness {alpha_max:e}, \
+             \"step_correlation\" = {}), more than {GPIS_MAX_BAND_SAMPLES:e}: lower the roughness (or raise the lengthscales), \
+             \"shell_extent\" or \"step_correlation\"",
+            settings.envelope, settings.step_correlation
+        )))
+    }
 }

@@ -23,7 +23,7 @@ use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
 use crate::gpis::{GpisSurface, MarchSettings, Memory, SeKernel};
 use crate::height::{HeightProfile, DEFAULT_SHELL_EXTENT};
-use crate::limits::{check_alpha_z, check_conductor_index, check_gpis_band, check_roughness, check_sigma};
+use crate::limits::{check_alpha_z, check_conductor_index, check_gpis_band, check_march_length, check_roughness, check_sigma};
 use crate::medium::MacrofacetMedium;
 use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Ndf};
 use crate::phase::{MacrofacetPhase, MicroBsdf, VndfSampling};
@@ -276,31 +276,6 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
     };
     r.finish()?;
     Ok(GpisSurface { kernel, memory, settings, micro_bsdf })
-}
-
-/// Most samples a gpis march may take to cross its band `±kσ` along the normal: the march of
-/// one segment costs `O(window²)` per sample (about 0.6 µs), and rays at 84° from the normal
-/// must still cross within [`MarchSettings::max_points`] (1e5) samples.
-pub const GPIS_MAX_BAND_SAMPLES: f64 = 1e4;
-
-/// Refuses gpis parameters whose march would take more than [`GPIS_MAX_BAND_SAMPLES`] samples to
-/// cross the band at normal incidence: `2kσ/Δt` with the step `Δt = l sqrt(−2 ln ρ)` along the
-/// roughest axis, `l = √2 σ/α_max` (seeds/000 Eq. 4), capped at `σ` (issue 9 item 13: `α = 1e5`
-/// took over 20 s for 16² pixels).
-fn check_march_length(settings: &MarchSettings, alpha: [f64; 3]) -> Result<()> {
-    let alpha_max = alpha.iter().copied().fold(0.0, f64::max);
-    let step_over_sigma = (std::f64::consts::SQRT_2 / alpha_max * (-2.0 * settings.step_correlation.ln()).sqrt()).min(settings.max_step);
-    let samples = 2.0 * settings.envelope / step_over_sigma;
-    if samples <= GPIS_MAX_BAND_SAMPLES {
-        Ok(())
-    } else {
-        Err(Error::new(ErrorKind::InvalidValue, format!(
-            "a gpis march across the band of \"shell_extent\" = {} sigma would take {samples:.3e} samples (largest roughness {alpha_max:e}, \
-             \"step_correlation\" = {}), more than {GPIS_MAX_BAND_SAMPLES:e}: lower the roughness (or raise the lengthscales), \
-             \"shell_extent\" or \"step_correlation\"",
-            settings.envelope, settings.step_correlation
-        )))
-    }
 }
 
 /// `sigma` from `sigma` or `variance` (exactly one), within [`crate::limits::SIGMA_RANGE`].

@@ -59,7 +59,8 @@ pub trait MicrofacetDistribution {
         if cos <= 0.0 {
             return 0.0;
         }
-        self.visible_area(wi).map_or(0.0, |area| cos * self.d(m) / area)
+        // cos (D / area): the product cos D underflows for grazing m before the quotient does.
+        self.visible_area(wi).map_or(0.0, |area| cos * (self.d(m) / area))
     }
 }
 

@@ -669,6 +669,9 @@ enum mf_status mf_phase_eval_pdf_local(const struct mf_medium *medium,
  * `shell_extent` = half-width of the sampled band in σ, default 6, `distribution` gpss |
  * beckmann, `alpha*`, `lengthscale*`, `material`, `eta`, `k`, `specular_reflectance`) plus
  * `memory` (renewal | renewal_plus, default renewal_plus) and `step_correlation` (default 0.95).
+ * The medium's domain applies, and the march is bounded: parameters whose march across the band
+ * at normal incidence would take more than 1e4 samples (`alpha` above about 377 at the defaults)
+ * are refused, naming what to change.
  *
  * # Safety
  * `params` must be a live handle (or NULL); `out_gpis` NULL or valid for writes.
@@ -703,6 +706,13 @@ enum mf_status mf_gpis_envelope(const struct mf_gpis *gpis,
  * failure (`MF_ERROR_CALLBACK`) or invalid parameters (a `sigma` above the field's
  * `sigma_max`, a non-positive-definite anisotropy, ...) — nothing is written then.
  *
+ * An on-surface start whose realization enters at once (Renewal forgets the slope at the start;
+ * with Renewal+ a direction into the remembered surface, e.g. a shadow ray) reports its crossing
+ * at a small `t > 0` (at most 2^-16 of a march step). A NaN or infinite answer of `sdf` ends the
+ * call with `MF_ERROR_INVALID_ARGUMENT` at most 5 calls after it; with `memory = renewal_plus`,
+ * `start.gradient` must lie within 40 standard deviations of the prior slope at `origin` (any
+ * gradient a previous `mf_gpis_hit` returned does) and is checked before the march.
+ *
  * # Safety
  * Pointers must be NULL or valid; `sdf` and the field's callbacks must be safe to call with
  * `user_data` from this thread.
@@ -734,8 +744,10 @@ enum mf_status mf_gpis_scatter(const struct mf_gpis *gpis,
                                struct mf_phase_sample_result *out_sample);
 
 /**
- * Creates a medium from named parameters (see the README's parameter table). On failure nothing
- * is written to `*out_medium` and [`super::mf_last_error_message`] names the parameter.
+ * Creates a medium from named parameters (see the README's parameter table). Values outside
+ * the domain stated there (e.g. `sigma` outside [1e-50, 1e50]) are refused with the reason. On
+ * failure nothing is written to `*out_medium` and [`super::mf_last_error_message`] names the
+ * parameter.
  *
  * # Safety
  * `params` must be a live handle (or NULL); `out_medium` NULL or valid for writes.
@@ -868,7 +880,9 @@ enum mf_status mf_phase_pdf(const struct mf_medium *medium,
 
 /**
  * Samples a scattering direction from `wi` (pointing away from the event) with
- * [`MF_PHASE_SAMPLE_DIMENSIONS`] uniform numbers in `[0, 1)` read from `u`.
+ * [`MF_PHASE_SAMPLE_DIMENSIONS`] uniform numbers in `[0, 1)` read from `u`. A valid sample's
+ * `pdf` is what [`mf_phase_pdf`] returns for the same medium, frame, `wi` and the returned `wo`,
+ * bit for bit, and `pdf > 0`; `weight` is [`mf_phase_eval`] divided by it (to rounding).
  *
  * # Safety
  * Pointers must be NULL or valid; `u` must hold `MF_PHASE_SAMPLE_DIMENSIONS` doubles.

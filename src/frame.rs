@@ -22,14 +22,15 @@ impl Frame {
     pub fn from_normal_tangent(n: DVec3, tangent: DVec3) -> Result<Frame> {
         check_finite_vector("normal", n)?;
         check_finite_vector("tangent", tangent)?;
-        let n = n.try_normalize().ok_or_else(|| {
+        let n = rescaled(n).try_normalize().ok_or_else(|| {
             Error::new(ErrorKind::InvalidArgument, "the normal must not be the zero vector")
         })?;
         // A tangent (nearly) parallel to n leaves only rounding noise after the projection;
         // normalising that noise would give a vector that is not orthogonal to n.
+        let tangent = rescaled(tangent);
         let projected = tangent - n * n.dot(tangent);
         let s = if projected.length() > 1e-6 * tangent.length() {
-            projected.normalize()
+            rescaled(projected).normalize()
         } else {
             n.any_orthonormal_vector()
         };
@@ -48,6 +49,20 @@ impl Frame {
     pub fn to_world(&self, v: DVec3) -> DVec3 {
         self.s * v.x + self.t * v.y + self.n * v.z
     }
+}
+
+/// `v` divided by its largest component magnitude (a power of two, so exactly), which leaves
+/// its direction unchanged. Normalising then squares numbers near 1: `|v|²` of a vector as short
+/// as 1e-159 is subnormal (a normal of length 1e-159 gave world directions of length 0.999999,
+/// issue 9 item 5) and that of a vector longer than 1e154 overflows.
+fn rescaled(v: DVec3) -> DVec3 {
+    let largest = v.abs().max_element();
+    if largest == 0.0 || !largest.is_finite() {
+        return v;
+    }
+    // 2^(−exponent of largest): exact, and no overflow for subnormal `largest` (2^1074 would).
+    let exponent = (largest.log2().floor() as i32).clamp(-1022, 1023);
+    v * 2f64.powi(-exponent)
 }
 
 /// Rejects NaN or infinite components; the message names `name`.

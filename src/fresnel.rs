@@ -6,22 +6,33 @@ use crate::Rgb;
 /// Unpolarised reflectance of a conductor, the exact closed form for a complex index
 /// `eta + i k` relative to the outside medium (Born & Wolf, Sec. 14.2; the usual rendering
 /// arrangement of it in terms of `a² + b²`). `cos_i` is clamped to `[0, 1]`.
+///
+/// With `a + i b = sqrt(eta² − k² − sin² + 2i eta k)`, the usual
+/// `R_s = (a² + b² + cos² − 2a cos) / (a² + b² + cos² + 2a cos)` is written as
+/// `((a − cos)² + b²) / ((a + cos)² + b²)`, and `R_p / R_s` likewise as
+/// `((a cos − sin²)² + b² cos²) / ((a cos + sin²)² + b² cos²)`: sums of squares, so the result lies
+/// in `[0, 1]` by construction. The difference form cancels to a negative reflectance near
+/// `eta = 1, k = 0` (found by fuzzing: a weight of −4.6e-17).
 pub fn fresnel_conductor(cos_i: f64, eta: f64, k: f64) -> f64 {
     let c = cos_i.clamp(0.0, 1.0);
     let c2 = c * c;
     let s2 = 1.0 - c2;
-    let eta2 = eta * eta;
-    let k2 = k * k;
+    let (eta2, k2) = (eta * eta, k * k);
     let t0 = eta2 - k2 - s2;
     let a2_plus_b2 = (t0 * t0 + 4.0 * eta2 * k2).sqrt();
+    // a² and b² are halves of (a² + b²) ± t0, both >= 0; rounding may leave a hair below.
     let a = (0.5 * (a2_plus_b2 + t0)).max(0.0).sqrt();
-    let t1 = a2_plus_b2 + c2;
-    let t2 = 2.0 * c * a;
-    let rs = (t1 - t2) / (t1 + t2);
-    let t3 = c2 * a2_plus_b2 + s2 * s2;
-    let t4 = t2 * s2;
-    let rp = rs * (t3 - t4) / (t3 + t4);
-    0.5 * (rs + rp)
+    let b2 = (0.5 * (a2_plus_b2 - t0)).max(0.0);
+    let rs_denominator = (a + c).powi(2) + b2;
+    if rs_denominator == 0.0 {
+        return 0.0; // eta = 1, k = 0 at grazing incidence: no interface, no reflection
+    }
+    let rs = ((a - c).powi(2) + b2) / rs_denominator;
+    let (ac, b2c2) = (a * c, b2 * c2);
+    let rp_denominator = (ac + s2).powi(2) + b2c2;
+    // 0 only at normal incidence (s2 = 0) with a = b = 0 (eta = k = 0), where R_p = R_s.
+    let rp_over_rs = if rp_denominator == 0.0 { 1.0 } else { ((ac - s2).powi(2) + b2c2) / rp_denominator };
+    0.5 * rs * (1.0 + rp_over_rs)
 }
 
 /// [`fresnel_conductor`] per channel.

@@ -11,7 +11,8 @@
 //! ray would meet there with probability `1 − Φ(k)` (1.3e-3 for k = 3) — that bounds the region
 //! a host must march through.
 
-use crate::error::{check_positive, Result};
+use crate::error::Result;
+use crate::limits::{check_shell_extent, check_sigma};
 use crate::special::{ln_normal_cdf, normal_pdf_over_cdf, probit_of_ln};
 
 /// Default `k` of the `+kσ` top face (seeds/000 Sec. 4 uses 3σ).
@@ -26,11 +27,10 @@ pub struct HeightProfile {
 }
 
 impl HeightProfile {
+    /// `sigma` within [`crate::limits::SIGMA_RANGE`], `shell_extent` within
+    /// [`crate::limits::SHELL_EXTENT_RANGE`].
     pub fn new(sigma: f64, shell_extent: f64) -> Result<HeightProfile> {
-        Ok(HeightProfile {
-            sigma: check_positive("sigma", sigma, false)?,
-            shell_extent: check_positive("shell_extent", shell_extent, false)?,
-        })
+        Ok(HeightProfile { sigma: check_sigma("parameter \"sigma\"", sigma)?, shell_extent: check_shell_extent(shell_extent)? })
     }
 
     /// Signed distance of the shell's top face, `kσ`.
@@ -50,6 +50,20 @@ impl HeightProfile {
     /// `ln Φ(min(f, kσ)/σ)`: an antiderivative of [`Self::density`] in `f`.
     pub fn ln_cdf(&self, f: f64) -> f64 {
         ln_normal_cdf(f.min(self.top()) / self.sigma)
+    }
+
+    /// `ln Φ(fb/σ) − ln Φ(fa/σ)` for `fa, fb <= kσ`. Beyond `|f| ≈ 1.34e154 σ` both logarithms
+    /// are `−∞` and their difference NaN; there `ln Φ(x) = −x²/2 − ln(−x) − ln √(2π)` to f64
+    /// precision (the next term is `−1/x²`), so the difference is
+    /// `−(xb − xa)(xb + xa)/2 − ln(xb/xa)`, which stays finite or overflows to `±∞` as it should
+    /// (found by fuzzing: a long segment far inside had τ = 0).
+    fn ln_cdf_difference(&self, fa: f64, fb: f64) -> f64 {
+        let (ln_a, ln_b) = (self.ln_cdf(fa), self.ln_cdf(fb));
+        if ln_a.is_finite() || ln_b.is_finite() {
+            return ln_b - ln_a;
+        }
+        let (xa, xb) = (fa / self.sigma, fb / self.sigma);
+        -0.5 * (xb - xa) * (xb + xa) - (xb / xa).ln()
     }
 }
 
@@ -73,6 +87,11 @@ impl HeightProfile {
             let rho = self.density(f0);
             return if rho == 0.0 { 0.0 } else { t * rho };
         }
+        if slope > 0.0 && f0 >= top {
+            // Rising from the top face or above it: above the shell for every s > 0, even where
+            // f0 + s·slope rounds back to f0 (found by fuzzing: T(1) = 0.99962, T(1e10) = 1).
+            return 0.0;
+        }
         // The end value without forming ∞·0 for an infinite segment.
         let f1 = if t == f64::INFINITY { slope.signum() * f64::INFINITY } else { f0 + slope * t };
         let (above0, above1) = (f0 > top, f1 > top);
@@ -92,7 +111,7 @@ impl HeightProfile {
             return inside * mean;
         }
         // Both factors change sign together; rounding may leave a tiny negative value.
-        ((self.ln_cdf(fb) - self.ln_cdf(fa)) / slope).max(0.0)
+        (self.ln_cdf_difference(fa, fb) / slope).max(0.0)
     }
 
     /// The smallest `t ∈ [0, t_max]` with `density_integral(f0, slope, t) = target`, or `None`
@@ -109,12 +128,12 @@ impl HeightProfile {
             let top = self.top();
             let f_start = f0.min(top);
             let f_end = if t_max == f64::INFINITY { slope.signum() * f64::INFINITY } else { f0 + slope * t_max };
-            if f0 > top && f_end > top {
-                return None;
+            if (f0 > top && f_end > top) || (slope > 0.0 && f0 >= top) {
+                return None; // above the shell for every s > 0 (as in density_integral)
             }
             if (f_end.min(top) - f_start).abs() > SMALL_DELTA * self.sigma {
                 let ln_start = self.ln_cdf(f_start);
-                let total = if f_end == f64::NEG_INFINITY { f64::INFINITY } else { ((self.ln_cdf(f_end) - ln_start) / slope).max(0.0) };
+                let total = if f_end == f64::NEG_INFINITY { f64::INFINITY } else { (self.ln_cdf_difference(f_start, f_end.min(top)) / slope).max(0.0) };
                 if !(target < total) {
                     return None;
                 }
@@ -140,6 +159,11 @@ impl HeightProfile {
         let top = self.top();
         // Where the segment enters the shell (only a descending segment can start above it).
         let t_start = if f0 > top { (f0 - top) / -slope } else { 0.0 };
+        if !t_start.is_finite() {
+            // Descending so slowly that the shell lies beyond f64::MAX (found by fuzzing: a
+            // collision "at t = +inf"): no representable distance reaches it.
+            return None;
+        }
         let f_start = f0.min(top);
         let guess = if slope == 0.0 {
             target / self.density(f0)

@@ -29,6 +29,7 @@ pub mod frame;
 pub mod fresnel;
 pub mod gpis;
 pub mod height;
+pub mod limits;
 pub mod medium;
 pub mod ndf;
 pub mod params;

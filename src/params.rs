@@ -27,6 +27,7 @@ use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
 use crate::gpis::{GpisSurface, MarchSettings, Memory, SeKernel};
 use crate::height::{HeightProfile, DEFAULT_SHELL_EXTENT};
+use crate::limits::{check_alpha_z, check_conductor_index, check_gpis_band, check_march_length, check_roughness, check_sigma};
 use crate::medium::MacrofacetMedium;
 use crate::ndf::{alpha_from_kernel, Beckmann, BeckmannUniformMixture, Ggx, Gpss, Gtr, GtrLambda, Ltmd, LtmdBase, Ndf, NormalUniformMixture};
 use crate::phase::{MacrofacetPhase, MicroBsdf, VndfSampling};
@@ -247,7 +248,7 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
     let sigma = read_sigma(&r)?;
     let mut settings = MarchSettings::default();
     if let Some(k) = r.float("shell_extent")? {
-        settings.envelope = check_positive("shell_extent", k, false)?;
+        settings.envelope = check_gpis_band(k)?;
     }
     if let Some(rho) = r.float("step_correlation")? {
         if !(rho > 0.0 && rho < 1.0) {
@@ -265,6 +266,7 @@ pub fn gpis_from_params(params: &ParamSet) -> Result<GpisSurface> {
         other => return Err(invalid_choice("distribution", other, "\"gpss\", \"beckmann\"")),
     };
     let alpha = read_roughness(&r, sigma, !height_field)?;
+    check_march_length(&settings, alpha)?;
     let kernel = SeKernel::from_roughness(sigma, glam::DVec3::from_array(alpha))?;
     let memory = match r.string("memory")?.unwrap_or("renewal_plus") {
         "renewal" => Memory::Renewal,
@@ -381,11 +383,11 @@ fn read_transform(r: &Reader) -> Result<Option<glam::DMat2>> {
     }
 }
 
-/// `sigma` from `sigma` or `variance` (exactly one).
+/// `sigma` from `sigma` or `variance` (exactly one), within [`crate::limits::SIGMA_RANGE`].
 fn read_sigma(r: &Reader) -> Result<f64> {
     match (r.float("sigma")?, r.float("variance")?) {
-        (Some(s), None) => check_positive("sigma", s, false),
-        (None, Some(v)) => Ok(check_positive("variance", v, false)?.sqrt()),
+        (Some(s), None) => check_sigma("parameter \"sigma\"", check_positive("sigma", s, false)?),
+        (None, Some(v)) => check_sigma("sigma = sqrt(\"variance\")", check_positive("variance", v, false)?.sqrt()),
         (Some(_), Some(_)) => Err(missing("give either \"sigma\" or \"variance\", not both".into())),
         (None, None) => Err(missing("\"sigma\" (or \"variance\") is required".into())),
     }
@@ -409,9 +411,14 @@ fn read_roughness(r: &Reader, sigma: f64, with_z: bool) -> Result<[f64; 3]> {
     // Checked here so that the message names the parameter as given (alpha_z may be 0).
     let to_alpha = |name: &str, v: f64| -> Result<f64> {
         if uses_kernel {
-            Ok(alpha_from_kernel(sigma, check_positive(name, v, false)?))
+            let alpha = alpha_from_kernel(sigma, check_positive(name, v, false)?);
+            let subject = format!("the roughness sqrt(2) sigma / \"{name}\" (with \"{name}\" = {v:e})");
+            let check = if name == "lengthscale_z" { check_alpha_z } else { check_roughness };
+            check(&subject, alpha)
         } else {
-            check_positive(name, v, name == "alpha_z")
+            let subject = format!("parameter \"{name}\"");
+            // "alpha" also sets alpha_z (an isotropic kernel): within both ranges then.
+            if name == "alpha_z" { check_alpha_z(&subject, v) } else { check_roughness(&subject, v) }
         }
     };
     let read = |i: usize| -> Result<Option<f64>> { r.float(names[i])?.map(|v| to_alpha(names[i], v)).transpose() };
@@ -453,9 +460,9 @@ fn read_conductor(r: &Reader) -> Result<MicroBsdf> {
             Ok(MicroBsdf::Conductor { eta: preset.eta, k: preset.k, specular_reflectance })
         }
         (None, Some(eta), Some(k)) => {
-            for (c, e) in eta.iter().enumerate() {
-                check_positive("eta", *e, false).map_err(|_| Error::new(ErrorKind::InvalidValue,
-                    format!("parameter \"eta\" must be > 0 in every channel, channel {c} is {e}")))?;
+            for c in 0..3 {
+                check_conductor_index("eta", c, eta[c])?;
+                check_conductor_index("k", c, k[c])?;
             }
             Ok(MicroBsdf::Conductor { eta, k, specular_reflectance })
         }

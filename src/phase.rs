@@ -18,7 +18,8 @@ use glam::DVec3;
 use std::f64::consts::{FRAC_1_PI, PI};
 
 /// How many uniform random numbers [`MacrofacetPhase::sample`] consumes: three for the visible
-/// normal, two for the diffuse lobe of a diffuse flake (unused otherwise).
+/// normal of a specular flake; for a diffuse flake the first picks one of the rule's normals and
+/// the last two the cosine lobe about it.
 pub const PHASE_SAMPLE_DIMENSIONS: usize = 5;
 
 /// Points of the deterministic quasi-Monte Carlo rule that evaluates the diffuse-flake phase
@@ -112,11 +113,7 @@ impl MacrofacetPhase {
                 reflectance.map(|r| r * p)
             }
             _ => {
-                let Some((m, cos)) = half_vector(wi, wo) else { return [0.0; 3] };
-                let area = self.ndf.projected_area(wi);
-                if area <= 0.0 {
-                    return [0.0; 3];
-                }
+                let (Some(area), Some((m, cos))) = (self.ndf.visible_area(wi), half_vector(wi, wo)) else { return [0.0; 3] };
                 let f = self.micro_bsdf.specular(cos).unwrap_or([0.0; 3]);
                 let p = self.ndf.d(m) / (4.0 * area);
                 f.map(|x| x * p)
@@ -142,23 +139,44 @@ impl MacrofacetPhase {
             MicroBsdf::Diffuse { .. } => self.diffuse_lobe_integral(wi, wo),
             _ => {
                 let Some((m, cos)) = half_vector(wi, wo) else { return 0.0 };
-                self.pdf_normal(wi, m) / (4.0 * cos)
+                match self.sampling {
+                    // D_wi(m) / (4 wi·m) (Eq. 12 and the reflection's Jacobian) with wi·m
+                    // cancelled: forming wi·m D(m) first underflows for grazing m, where the
+                    // result is an ordinary number (found by fuzzing: eval/pdf off by 1e-3).
+                    // The area is the one the sampler normalises by (it differs from the
+                    // projected area only where Λ is a model: GTR with Dimov's Λ).
+                    VndfSampling::Exact => {
+                        let area = self.ndf.sampling_projected_area(wi);
+                        if area >= f64::MIN_POSITIVE {
+                            self.ndf.d(m) / (4.0 * area)
+                        } else {
+                            0.0
+                        }
+                    }
+                    VndfSampling::Mixture(mix) => mix.pdf(wi, m) / (4.0 * cos),
+                    VndfSampling::NormalMixture(mix) => mix.pdf(&self.ndf, wi, m) / (4.0 * cos),
+                }
             }
         }
     }
 
     /// Samples `wo` with [`PHASE_SAMPLE_DIMENSIONS`] uniforms in `[0, 1)`. `None` when nothing is
     /// visible from `wi` or the sample is degenerate (probability zero for valid input).
+    /// [`Self::sample_direction`] followed by [`Self::sample_record`].
     pub fn sample(&self, wi: DVec3, u: [f64; PHASE_SAMPLE_DIMENSIONS]) -> Option<PhaseSample> {
+        self.sample_record(wi, self.sample_direction(wi, u)?)
+    }
+
+    /// The direction part of [`Self::sample`]: `wo` drawn with density [`Self::pdf`].
+    pub fn sample_direction(&self, wi: DVec3, u: [f64; PHASE_SAMPLE_DIMENSIONS]) -> Option<DVec3> {
         let u_normal = [u[0], u[1], u[2]];
         match self.micro_bsdf {
-            MicroBsdf::Diffuse { reflectance } => {
-                let m = self.ndf.sample_visible(wi, u_normal)?;
-                let wo = cosine_around(m, u[3], u[4]);
-                let pdf = self.diffuse_lobe_integral(wi, wo);
-                // Exact: m ~ D_wi and wo ~ cos/π about m reproduce p/albedo, so the weight is the
-                // albedo; `pdf` is the quadrature estimate used only for MIS.
-                Some(PhaseSample { wo, weight: reflectance, pdf })
+            MicroBsdf::Diffuse { .. } => {
+                // One of the rule's normals, chosen by u[0], and a cosine lobe about it: the
+                // density of `wo` is then exactly the rule's `p` (see `diffuse_lobe_integral`).
+                let i = ((u[0] * DIFFUSE_EVAL_POINTS as f64) as usize).min(DIFFUSE_EVAL_POINTS - 1);
+                let m = self.ndf.sample_visible(wi, diffuse_rule_point(i))?;
+                Some(cosine_around(m, u[3], u[4]))
             }
             _ => {
                 let m = match self.sampling {
@@ -166,58 +184,67 @@ impl MacrofacetPhase {
                     VndfSampling::Mixture(mix) => mix.sample(wi, u_normal)?,
                     VndfSampling::NormalMixture(mix) => mix.sample(&self.ndf, wi, u_normal)?,
                 };
-                let cos = wi.dot(m);
-                if cos <= 0.0 {
-                    return None;
-                }
-                let wo = reflect(wi, m).try_normalize()?;
-                let f = self.micro_bsdf.specular(cos)?;
-                let pdf = self.pdf_normal(wi, m) / (4.0 * cos);
-                if !(pdf > 0.0) {
-                    return None;
-                }
-                let weight = match self.sampling {
-                    // eval/pdf = F · sampling_area/area: F itself unless Λ is a model.
-                    VndfSampling::Exact if self.ndf.lambda_is_projected_area() => f,
-                    VndfSampling::Exact => {
-                        let ratio = self.ndf.sampling_projected_area(wi) / self.ndf.projected_area(wi);
-                        f.map(|x| x * ratio)
-                    }
-                    VndfSampling::Mixture(_) | VndfSampling::NormalMixture(_) => {
-                        let value = self.ndf.d(m) / (4.0 * self.ndf.projected_area(wi));
-                        f.map(|x| x * value / pdf)
-                    }
-                };
-                Some(PhaseSample { wo, weight, pdf })
+                (wi.dot(m) > 0.0).then(|| reflect(wi, m).try_normalize()).flatten()
             }
         }
     }
 
-    /// Density of the normal sampler in use, per solid angle of `m`.
-    fn pdf_normal(&self, wi: DVec3, m: DVec3) -> f64 {
-        match self.sampling {
-            VndfSampling::Exact => self.ndf.pdf_visible(wi, m),
-            VndfSampling::Mixture(mix) => mix.pdf(wi, m),
-            VndfSampling::NormalMixture(mix) => mix.pdf(&self.ndf, wi, m),
+    /// The [`PhaseSample`] of a direction `wo` from [`Self::sample_direction`]: `pdf` is
+    /// [`Self::pdf`]`(wi, wo)` bit for bit and `weight` is `eval(wi, wo) / pdf` (for diffuse
+    /// flakes exactly the albedo, for exact sampling exactly the flake's Fresnel reflectance).
+    /// `None` when that density is below the smallest normal `f64` (then it and `eval` have lost
+    /// their precision, and `eval / pdf` is noise; such directions have a total probability below
+    /// `4π · 2.2e-308`) or overflows (the Eq. 40 mixture's density diverges like `1/(wi·m)` as `wo`
+    /// turns back onto `-wi`; its weight `eval/pdf` is 0 there, so no estimate changes).
+    ///
+    /// Everything is evaluated at `wo`, not at the normal it was sampled with: the half vector
+    /// of `wo` differs from that normal by rounding (~1e-16), which changes `D` by up to 1e-6
+    /// relative where its lobe is 1e-10 rad wide (issue 9 item 7), and a host must get one
+    /// density for one pair of directions. A host working in another frame passes `wo` after
+    /// its own round trip (the C ABI does), so that the pdf it later queries is this one.
+    pub fn sample_record(&self, wi: DVec3, wo: DVec3) -> Option<PhaseSample> {
+        let pdf = self.pdf(wi, wo);
+        if !(pdf >= f64::MIN_POSITIVE && pdf.is_finite()) {
+            return None;
         }
+        let weight = match self.micro_bsdf {
+            MicroBsdf::Diffuse { reflectance } => reflectance,
+            _ => match self.sampling {
+                // D_wi(m) / (4 cos) is the density of m ~ D_wi reflected, so p / pdf = F unless
+                // Λ is a model (then p / pdf = F · sampling area / area).
+                VndfSampling::Exact if self.ndf.lambda_is_projected_area() => self.micro_bsdf.specular(half_vector(wi, wo)?.1)?,
+                _ => self.eval(wi, wo).map(|x| x / pdf),
+            },
+        };
+        Some(PhaseSample { wo, weight, pdf })
     }
 
     /// `∫ D_wi(m) <wo, m> / π dm`, the diffuse-flake phase function without its albedo,
     /// by a fixed quasi-Monte Carlo rule over the exact vNDF sampler (additive recurrence with
     /// the generalized golden ratio, Roberts 2018). Deterministic; the integrand is continuous,
     /// so the error decays roughly like 1/N.
+    ///
+    /// The rule is also *the* diffuse-flake phase function of this library: `p` is a mixture of
+    /// `DIFFUSE_EVAL_POINTS` clamped-cosine lobes about the rule's normals `m_i`, and
+    /// [`Self::sample_direction`] draws from exactly that mixture. So eval, pdf and sample agree to the
+    /// last bit, and a sampled `wo` always has `pdf > 0` (its own lobe contributes); sampling the
+    /// exact `D_wi` instead could land where every `m_i` has `<wo, m_i> = 0` (issue 9 item 4).
     fn diffuse_lobe_integral(&self, wi: DVec3, wo: DVec3) -> f64 {
-        // 1/φ3, 1/φ3², 1/φ3³ with φ3 the plastic number's 3-D analogue (x⁴ = x + 1).
-        const ALPHA: [f64; 3] = [0.819_172_513_396_164_4, 0.671_043_606_703_789_2, 0.549_700_477_901_970_4];
         let mut sum = 0.0;
         for i in 0..DIFFUSE_EVAL_POINTS {
-            let u = [0, 1, 2].map(|c| (0.5 + ALPHA[c] * i as f64).fract());
-            if let Some(m) = self.ndf.sample_visible(wi, u) {
+            if let Some(m) = self.ndf.sample_visible(wi, diffuse_rule_point(i)) {
                 sum += wo.dot(m).max(0.0);
             }
         }
         sum * FRAC_1_PI / DIFFUSE_EVAL_POINTS as f64
     }
+}
+
+/// Point `i` of the diffuse-flake rule in `[0, 1)³`: the additive recurrence with
+/// 1/φ3, 1/φ3², 1/φ3³, φ3 being the plastic number's 3-D analogue (x⁴ = x + 1).
+fn diffuse_rule_point(i: usize) -> [f64; 3] {
+    const ALPHA: [f64; 3] = [0.819_172_513_396_164_4, 0.671_043_606_703_789_2, 0.549_700_477_901_970_4];
+    [0, 1, 2].map(|c| (0.5 + ALPHA[c] * i as f64).fract())
 }
 
 /// The half vector of a reflection and `wi·m`; `None` for back-to-back directions.

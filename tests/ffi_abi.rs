@@ -4,14 +4,16 @@
 //! pointers) for many seeded random inputs on media covering the parameter table, and compared
 //! with `medium_from_params` + the core methods on the same inputs, preprocessed exactly as the
 //! documented contract says (frame from normal and tangent, world directions checked to unit
-//! length and taken to the local frame). No tolerance: the FFI layer must add no arithmetic.
+//! length and taken to the local frame). No tolerance: the FFI layer must add no arithmetic
+//! (a phase sample's pdf and weight are by contract those of the returned world-space `wo` taken
+//! back to the local frame, so that `mf_phase_pdf` reproduces them: the core does the same).
 //! Also checks the `#[repr(C)]` layouts against the numbers `tests/c/abi_test.c` asserts with
 //! `offsetof`, so that both sides of the boundary agree on them.
 
 use glam::DVec3;
 use macrofacet::ffi::*;
 use macrofacet::frame::{check_direction, Frame};
-use macrofacet::{medium_from_params, FreeFlight, MacrofacetMedium, ParamSet};
+use macrofacet::{medium_from_params, FreeFlight, MacrofacetMedium, ParamSet, PhaseSample};
 use std::ffi::CString;
 use std::mem::{offset_of, size_of};
 use std::ptr;
@@ -140,6 +142,12 @@ impl Core {
     fn local(&self, d: mf_vec3) -> DVec3 {
         self.frame.to_local(check_direction("d", dv(d)).unwrap())
     }
+    /// A phase sample as the contract defines it: the core's direction taken to world space, and
+    /// the pdf and weight of that world direction as `mf_phase_pdf` takes it back to local.
+    fn phase_sample(&self, core: &MacrofacetMedium, wi: DVec3, u: [f64; MF_PHASE_SAMPLE_DIMENSIONS]) -> Option<(DVec3, PhaseSample)> {
+        let wo = self.frame.to_world(core.phase.sample_direction(wi, u)?);
+        Some((wo, core.phase.sample_record(wi, self.local(v(wo)))?))
+    }
 }
 
 #[test]
@@ -210,10 +218,9 @@ fn ffi_queries_equal_the_core_bit_for_bit() {
                     valid: true,
                 };
                 assert_eq!(mf_phase_sample(h, &fr, wi, us.as_ptr(), &mut s), mf_status::MF_OK);
-                match core.phase.sample(wil, us) {
-                    Some(cs) => {
+                match c.phase_sample(&core, wil, us) {
+                    Some((w, cs)) => {
                         assert!(s.valid, "phase sample valid: {ctx}");
-                        let w = c.frame.to_world(cs.wo);
                         assert_eq!([s.wo.x, s.wo.y, s.wo.z].map(f64::to_bits), [w.x, w.y, w.z].map(f64::to_bits), "sample wo: {ctx}");
                         assert_eq!(rgb_bits(s.weight), bits3(cs.weight), "sample weight: {ctx}");
                         assert_eq!(s.pdf.to_bits(), cs.pdf.to_bits(), "sample pdf: {ctx}");
@@ -278,9 +285,8 @@ fn batches_equal_the_core_bit_for_bit() {
             assert_eq!(rgb_bits(pv[i].value), bits3(core.phase.eval(wi, wo)), "eval batch: {ctx}");
             assert_eq!(pv[i].pdf.to_bits(), core.phase.pdf(wi, wo).to_bits(), "pdf batch: {ctx}");
             let c = Core::new(&sq[i].frame);
-            match core.phase.sample(c.local(sq[i].wi), sq[i].u) {
-                Some(s) => {
-                    let w = c.frame.to_world(s.wo);
+            match c.phase_sample(&core, c.local(sq[i].wi), sq[i].u) {
+                Some((w, s)) => {
                     assert!(ps[i].valid, "sample batch valid: {ctx}");
                     assert_eq!([ps[i].wo.x, ps[i].wo.y, ps[i].wo.z].map(f64::to_bits), [w.x, w.y, w.z].map(f64::to_bits), "{ctx}");
                     assert_eq!(rgb_bits(ps[i].weight), bits3(s.weight), "sample batch weight: {ctx}");
@@ -303,6 +309,12 @@ fn construction_errors_map_to_statuses() {
         (vec![F("sigma", 1.0), F("alpha", 0.3), F("bogus", 1.0)], mf_status::MF_ERROR_UNKNOWN_PARAMETER),
         (vec![S("sigma", "1"), F("alpha", 0.3)], mf_status::MF_ERROR_WRONG_TYPE),
         (vec![F("sigma", 1.0), F("alpha", 0.3), S("distribution", "phong")], mf_status::MF_ERROR_INVALID_VALUE),
+        // Issue 9 item 8: parameters whose derived quantities leave the range of f64.
+        (vec![F("sigma", 1e308), F("alpha", 0.3)], mf_status::MF_ERROR_INVALID_VALUE),
+        (vec![F("variance", 1e300), F("alpha", 0.3)], mf_status::MF_ERROR_INVALID_VALUE),
+        (vec![F("sigma", 1.0), F("alpha", 0.3), F("shell_extent", 1e300)], mf_status::MF_ERROR_INVALID_VALUE),
+        (vec![F("sigma", 1.0), F("alpha", 1e-9)], mf_status::MF_ERROR_INVALID_VALUE),
+        (vec![F("sigma", 1.0), F("lengthscale_x", 1e-300), F("lengthscale_y", 1.0), F("lengthscale_z", 1.0)], mf_status::MF_ERROR_INVALID_VALUE),
     ];
     for (params, want) in cases {
         let mut set = ParamSet::new();
@@ -606,4 +618,229 @@ fn ndf_calls_equal_the_core_bit_for_bit() {
         }
         unsafe { mf_ndf_free(ndf) };
     }
+}
+/// A medium from float and string parameters (the issue's cases), as a C host builds it.
+fn ffi_medium(floats: &[(&str, f64)], strings: &[(&str, &str)]) -> *mut mf_medium {
+    let mut handle: *mut mf_params = ptr::null_mut();
+    let mut medium: *mut mf_medium = ptr::null_mut();
+    unsafe {
+        assert_eq!(mf_params_new(&mut handle), mf_status::MF_OK);
+        for (n, x) in floats {
+            assert_eq!(mf_params_set_float(handle, CString::new(*n).unwrap().as_ptr(), *x), mf_status::MF_OK);
+        }
+        for (n, s) in strings {
+            let (n, s) = (CString::new(*n).unwrap(), CString::new(*s).unwrap());
+            assert_eq!(mf_params_set_string(handle, n.as_ptr(), s.as_ptr()), mf_status::MF_OK);
+        }
+        assert_eq!(mf_medium_new(handle, &mut medium), mf_status::MF_OK);
+        mf_params_free(handle);
+    }
+    medium
+}
+
+fn ffi_sample(m: *const mf_medium, frame: &mf_frame, wi: DVec3, u: [f64; MF_PHASE_SAMPLE_DIMENSIONS]) -> mf_phase_sample_result {
+    let mut s = mf_phase_sample_result { wo: v(DVec3::ZERO), weight: mf_rgb { r: 0.0, g: 0.0, b: 0.0 }, pdf: 0.0, valid: false };
+    assert_eq!(unsafe { mf_phase_sample(m, frame, v(wi), u.as_ptr(), &mut s) }, mf_status::MF_OK);
+    s
+}
+
+/// Issue 9 items 1, 5 and 7 through the ABI: a valid sample has a finite weight equal to
+/// eval/pdf, a unit `wo` that `mf_phase_eval` accepts, and `mf_phase_pdf(frame, wi, wo)` is its
+/// pdf bit for bit — with the issue's media, frames and directions.
+#[test]
+fn issue9_phase_samples_are_consistent_through_the_abi() {
+    let identity = mf_frame { normal: v(DVec3::Z), tangent: v(DVec3::X) };
+    // Item 5: a normal of length ~1e-159 (accepted, and now an orthonormal frame).
+    let tiny = mf_frame { normal: v(DVec3::new(3e-160, 2e-160, 7e-160)), tangent: v(DVec3::new(1.0, 0.0, 0.0)) };
+    let cases: Vec<(&str, *mut mf_medium, DVec3)> = vec![
+        ("item 1, alpha 0.3", ffi_medium(&[("sigma", 1.0), ("alpha_u", 0.3), ("alpha_v", 0.3), ("alpha_z", 0.0)], &[("vndf_sampling", "mixture")]), DVec3::new(0.79, 0.0, -0.60)),
+        ("item 1, alpha 1e-6", ffi_medium(&[("sigma", 1.0), ("alpha_u", 1e-6), ("alpha_v", 1e-6), ("alpha_z", 0.0)], &[("vndf_sampling", "mixture")]), DVec3::new(0.79, 0.0, -0.60)),
+        ("item 5", ffi_medium(&[("sigma", 1.0), ("alpha", 0.3)], &[]), DVec3::new(0.3, 0.2, 0.9)),
+        ("item 7", ffi_medium(&[("sigma", 1.0), ("alpha", 1e-6), ("alpha_z", 1e4)], &[]), DVec3::new(0.3, -0.5, 0.4)),
+        ("diffuse", ffi_medium(&[("sigma", 1.0), ("alpha", 1000.0)], &[("distribution", "beckmann"), ("micro_bsdf", "diffuse")]), DVec3::new(-0.88, -0.18, -0.43)),
+    ];
+    let mut rng = Rng(9);
+    for (name, m, wi_hint) in cases {
+        let mut valid = 0;
+        for i in 0..4000 {
+            let frame = match i % 3 {
+                0 => identity,
+                1 => tiny,
+                _ => rng.frame(),
+            };
+            // The issue's direction (normalised), or a random one every other time.
+            let wi = if i % 2 == 0 { wi_hint.normalize() } else { rng.direction() };
+            let u: [f64; MF_PHASE_SAMPLE_DIMENSIONS] = std::array::from_fn(|_| rng.next());
+            let s = ffi_sample(m, &frame, wi, u);
+            if !s.valid {
+                continue;
+            }
+            valid += 1;
+            let wo = dv(s.wo);
+            assert!((wo.length() - 1.0).abs() < 1e-14, "{name}: |wo| = {}", wo.length());
+            let (mut pdf, mut value) = (f64::NAN, mf_rgb { r: f64::NAN, g: f64::NAN, b: f64::NAN });
+            unsafe {
+                assert_eq!(mf_phase_pdf(m, &frame, v(wi), s.wo, &mut pdf), mf_status::MF_OK, "{name}");
+                assert_eq!(mf_phase_eval(m, &frame, v(wi), s.wo, &mut value), mf_status::MF_OK, "{name}");
+            }
+            assert_eq!(pdf.to_bits(), s.pdf.to_bits(), "{name}: sampled pdf vs mf_phase_pdf");
+            assert!(pdf > 0.0 && pdf.is_finite(), "{name}: {s:?}");
+            for (w, e) in [(s.weight.r, value.r), (s.weight.g, value.g), (s.weight.b, value.b)] {
+                assert!(w.is_finite() && (w - e / pdf).abs() <= 1e-12 * w.abs().max(e / pdf), "{name}: weight {w} vs eval/pdf {}", e / pdf);
+            }
+        }
+        assert!(valid > 500 || name == "item 1, alpha 1e-6", "{name}: only {valid} valid samples");
+        unsafe { mf_medium_free(m) };
+    }
+}
+
+/// A plane SDF (as `plane_sdf`) that answers NaN from call `user_data.1` on.
+unsafe extern "C" fn failing_sdf(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_sdf_sample) {
+    let state = &mut *(user_data as *mut (usize, usize));
+    state.0 += 1;
+    let f = if state.0 > state.1 { f64::NAN } else { p.z - 0.25 };
+    *out = mf_sdf_sample { f, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, u: 0.0, v: 0.0 };
+}
+
+fn ffi_gpis(floats: &[(&str, f64)], memory: &str) -> Result<*mut mf_gpis, (mf_status, String)> {
+    let mut handle: *mut mf_params = ptr::null_mut();
+    let sentinel = 0x5EAF00D as *mut mf_gpis;
+    let mut gpis = sentinel;
+    unsafe {
+        assert_eq!(mf_params_new(&mut handle), mf_status::MF_OK);
+        for (n, x) in floats {
+            assert_eq!(mf_params_set_float(handle, CString::new(*n).unwrap().as_ptr(), *x), mf_status::MF_OK);
+        }
+        let (n, s) = (CString::new("memory").unwrap(), CString::new(memory).unwrap());
+        assert_eq!(mf_params_set_string(handle, n.as_ptr(), s.as_ptr()), mf_status::MF_OK);
+        let status = mf_gpis_new(handle, &mut gpis);
+        mf_params_free(handle);
+        if status == mf_status::MF_OK {
+            return Ok(gpis);
+        }
+        assert_eq!(gpis, sentinel, "out_gpis written on failure");
+        Err((status, last_error()))
+    }
+}
+
+fn last_error() -> String {
+    let mut buf = [0u8; 1024];
+    let mut len = 0usize;
+    assert_eq!(unsafe { mf_last_error_message(buf.as_mut_ptr().cast(), buf.len(), &mut len) }, mf_status::MF_OK);
+    String::from_utf8_lossy(&buf[..len.min(buf.len() - 1)]).into_owned()
+}
+
+fn ffi_trace(
+    gpis: *const mf_gpis,
+    sdf: mf_sdf_fn,
+    state: *mut std::ffi::c_void,
+    origin: DVec3,
+    d: DVec3,
+    start: mf_gpis_start,
+    seed: u64,
+) -> (mf_status, mf_gpis_hit) {
+    let sentinel = mf_gpis_hit { hit: true, t: -7.0, point: v(DVec3::ONE), normal: v(DVec3::ONE), gradient: v(DVec3::ONE), local: mf_local_params::NONE };
+    let mut hit = sentinel;
+    let status = unsafe { mf_gpis_trace(gpis, sdf, ptr::null(), state, v(origin), v(d), f64::INFINITY, &start, seed, &mut hit) };
+    if status != mf_status::MF_OK {
+        assert_eq!(hit, sentinel, "out_hit written on failure");
+    }
+    (status, hit)
+}
+
+/// Issue 9 items 6, 8, 12 and 13 through the ABI.
+#[test]
+fn issue9_gpis_cases_through_the_abi() {
+    // Item 8 and 13: sigma = 1e308 and alpha = 1e5 are refused, naming what to change.
+    let (status, message) = ffi_gpis(&[("sigma", 1e308), ("alpha", 0.5)], "renewal").unwrap_err();
+    assert!(status == mf_status::MF_ERROR_INVALID_VALUE && message.contains("\"sigma\""), "{message}");
+    let (status, message) = ffi_gpis(&[("sigma", 1.0), ("alpha", 1e5)], "renewal").unwrap_err();
+    assert!(status == mf_status::MF_ERROR_INVALID_VALUE && message.contains("samples") && message.contains("step_correlation"), "{message}");
+
+    let gpis = ffi_gpis(&[("sigma", 1.0), ("alpha", 0.5)], "renewal_plus").unwrap();
+    let on_surface = |g: DVec3| mf_gpis_start { kind: MF_GPIS_START_ON_SURFACE, gradient: v(g) };
+    // Item 6: an on-surface start with d . gradient < 0 hit at t = 0 every time.
+    let mut calls = 0usize;
+    for seed in 0..300 {
+        let (status, hit) = ffi_trace(gpis, Some(plane_sdf), &mut calls as *mut usize as *mut _, DVec3::new(0.0, 0.0, 0.25), DVec3::new(0.6, 0.0, -0.8), on_surface(DVec3::Z), seed);
+        assert_eq!(status, mf_status::MF_OK);
+        assert!(hit.hit && hit.t > 0.0 && hit.t < 1e-2, "seed {seed}: {hit:?}");
+    }
+    // Item 12: a callback answering NaN is rejected within a few calls of the first NaN
+    // (400 004 calls before), from both kinds of start.
+    for nan_after in [0usize, 1, 3, 10] {
+        for (origin, start) in [
+            (DVec3::new(0.0, 0.0, 5.0), mf_gpis_start { kind: MF_GPIS_START_FREE, gradient: v(DVec3::ZERO) }),
+            (DVec3::new(0.0, 0.0, 0.25), on_surface(DVec3::Z)),
+        ] {
+            let mut state = (0usize, nan_after);
+            let (status, hit) = ffi_trace(gpis, Some(failing_sdf), &mut state as *mut (usize, usize) as *mut _, origin, DVec3::new(0.3, 0.0, -0.9).normalize(), start, 1);
+            if state.0 > nan_after {
+                assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT, "NaN after {nan_after}: {hit:?}");
+                assert!(last_error().contains("sdf callback"), "{}", last_error());
+                assert!(state.0 - nan_after <= 5, "NaN after {nan_after}: {} calls", state.0);
+            } else {
+                assert_eq!(status, mf_status::MF_OK);
+            }
+        }
+    }
+    // Item 12: a start gradient with a DBL_MAX component is refused after one callback call.
+    let mut state = (0usize, usize::MAX);
+    let (status, _) = ffi_trace(gpis, Some(failing_sdf), &mut state as *mut (usize, usize) as *mut _, DVec3::new(0.0, 0.0, 0.25), DVec3::Z, on_surface(DVec3::new(f64::MAX, 0.0, 1.0)), 1);
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT);
+    assert!(last_error().contains("start.gradient") && state.0 == 1, "{} calls: {}", state.0, last_error());
+    unsafe { mf_gpis_free(gpis) };
+}
+
+/// Found by fuzzing (target `phase`): the Eq. 40 mixture at grazing incidence (a frame normal of
+/// length 1e308, now accepted) with `u = 0` samples a normal at `wi·m ≈ 1e-310`, whose density
+/// `(1 − R)/(2π · 4 wi·m)` overflows: a valid sample had `pdf = inf`. Such a sample has weight 0
+/// and is not returned.
+#[test]
+fn fuzz_mixture_samples_with_overflowing_pdf_are_not_returned() {
+    let m = ffi_medium(&[("sigma", 3.0), ("lengthscale", 1.000000000001e4), ("mixture_ratio", 8.499862859600035e-5)], &[("vndf_sampling", "mixture")]);
+    let frame = mf_frame {
+        normal: mf_vec3 { x: 1e-6, y: -9.999999999997382e307, z: -3.255287074942678e-82 },
+        tangent: mf_vec3 { x: 1e-6, y: -9.999999999997382e307, z: -3.255287074942678e-82 },
+    };
+    let wi = DVec3::new(2.2609712140232665e-5, 0.0, 0.9999999997444005);
+    let s = ffi_sample(m, &frame, wi, [0.0; MF_PHASE_SAMPLE_DIMENSIONS]);
+    assert!(!s.valid || (s.pdf.is_finite() && s.pdf > 0.0), "{s:?}");
+    unsafe { mf_medium_free(m) };
+}
+
+/// The fuzz target's plane (`normal . p - offset`), answering NaN from call `good + 1` on: in the
+/// value on even calls, in the gradient's y on odd ones.
+unsafe extern "C" fn alternating_nan_plane(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_sdf_sample) {
+    let state = &mut *(user_data as *mut (usize, usize));
+    state.0 += 1;
+    let n = DVec3::new(0.9099771102496692, -0.04040297035089292, -0.41268542354738713);
+    let (mut f, mut g) = (n.dot(dv(p)) + 5.999908447265615e50, n);
+    if state.0 > state.1 {
+        if state.0 % 2 == 0 {
+            f = f64::NAN;
+        } else {
+            g.y = f64::NAN;
+        }
+    }
+    *out = mf_sdf_sample { f, gradient: v(g), u: 0.0, v: 0.0 };
+}
+
+/// Found by fuzzing (target `gpis`): a NaN that reached the march only as the prior mean of a
+/// conditioning value (the origin's, with the ray then ending at `t_max`) was ignored: MF_OK.
+#[test]
+fn fuzz_a_nan_mean_anywhere_fails_the_trace() {
+    let gpis = ffi_gpis(&[("sigma", 1e50), ("alpha", 10.0)], "renewal").unwrap();
+    let origin = DVec3::new(2.5941180484075706e47, -1.1522552036897194e46, 6.177765775644404e47);
+    let start = mf_gpis_start { kind: MF_GPIS_START_FREE, gradient: v(DVec3::ZERO) };
+    let mut state = (0usize, 5usize);
+    let hit_sentinel = mf_gpis_hit { hit: true, t: -7.0, point: v(DVec3::ONE), normal: v(DVec3::ONE), gradient: v(DVec3::ONE), local: mf_local_params::NONE };
+    let mut hit = hit_sentinel;
+    let status = unsafe {
+        mf_gpis_trace(gpis, Some(alternating_nan_plane), ptr::null(), &mut state as *mut (usize, usize) as *mut _, v(origin), v(DVec3::Y), 9.858706006832666, &start, 970143228277, &mut hit)
+    };
+    assert!(state.0 > 5, "the callback must have answered NaN ({} calls)", state.0);
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT, "{hit:?}");
+    assert_eq!(hit, hit_sentinel);
+    unsafe { mf_gpis_free(gpis) };
 }

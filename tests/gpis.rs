@@ -386,6 +386,7 @@ fn numerically_robust_on_degenerate_rays_and_kernels() {
         }
         Trace::Miss => {}
         Trace::Exhausted { t } => assert!(t.is_finite(), "{what}"),
+        Trace::InvalidMean { point } => panic!("{what}: the analytic mean is finite, got InvalidMean at {point}"),
     };
     let kernels = [
         SeKernel::new(1.0, DVec3::splat(1e-3)).unwrap(),

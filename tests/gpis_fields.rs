@@ -347,6 +347,7 @@ fn trace_bits(t: &Trace) -> Vec<u64> {
         Trace::Hit(c) => [c.t, c.point.x, c.point.y, c.point.z, c.gradient.x, c.gradient.y, c.gradient.z].iter().map(|v| v.to_bits()).collect(),
         Trace::Miss => vec![1],
         Trace::Exhausted { t } => vec![2, t.to_bits()],
+        Trace::InvalidMean { point } => vec![3, point.x.to_bits(), point.y.to_bits(), point.z.to_bits()],
     }
 }
 
@@ -721,6 +722,7 @@ fn bad_fields_are_clear_errors() {
                 Ok(Trace::Hit(c)) => assert!(c.t.is_finite() && c.gradient.is_finite() && c.normal.is_finite(), "alpha {alpha}: {c:?}"),
                 Ok(Trace::Exhausted { t }) => assert!(t.is_finite()),
                 Ok(Trace::Miss) => {}
+                Ok(Trace::InvalidMean { point }) => panic!("alpha {alpha}: the plane's mean is finite, yet InvalidMean at {point}"),
                 Err(e) => assert!(!e.message.is_empty()),
             }
         }

@@ -20,7 +20,7 @@ use super::medium::{mf_phase_sample_result, mf_rgb, mf_vec3};
 use super::track::field_arg;
 use super::{arg, boundary, free_handle, into_handle, mf_params, mf_status, out, FfiError};
 use crate::error::{Error, ErrorKind};
-use crate::field::{Constant, LocalParams};
+use crate::field::{Constant, LocalParams, MediumField};
 use crate::frame::check_direction;
 use crate::gpis::{GpisSurface, MeanSdf, StartState, Trace};
 use crate::params::gpis_from_params;
@@ -82,24 +82,28 @@ pub struct mf_gpis {
     inner: GpisSurface,
 }
 
-/// Adapts the host callback to [`MeanSdf`], remembering a non-finite answer.
+/// Adapts the host callback to [`MeanSdf`]. A non-finite answer is passed on as NaN: the march
+/// stops at the first one ([`Trace::InvalidMean`]).
 struct CallbackMean {
     sdf: unsafe extern "C" fn(*mut c_void, mf_vec3, *mut mf_sdf_sample),
     user_data: *mut c_void,
+    /// Set at the first non-finite answer.
     failed: Cell<bool>,
 }
 
 impl CallbackMean {
     fn eval(&self, p: DVec3) -> (f64, DVec3, DVec2) {
-        let mut s = mf_sdf_sample { f: f64::NAN, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 };
+        let nan = f64::NAN;
+        let mut s = mf_sdf_sample { f: nan, gradient: mf_vec3 { x: nan, y: nan, z: nan }, u: 0.0, v: 0.0 };
         // SAFETY: the host promised a callable function; it writes one mf_sdf_sample.
         unsafe { (self.sdf)(self.user_data, p.into(), &mut s) };
         let (g, uv) = (DVec3::from(s.gradient), DVec2::new(s.u, s.v));
         if s.f.is_finite() && g.is_finite() && uv.is_finite() {
             (s.f, g, uv)
         } else {
+            // The field (textures) may look up the uv before the march sees the NaN.
             self.failed.set(true);
-            (f64::MAX, DVec3::Z, DVec2::ZERO) // far outside: ends the march; the call then reports the failure
+            (f64::NAN, DVec3::NAN, DVec2::ZERO)
         }
     }
 }
@@ -124,6 +128,9 @@ fn invalid(message: String) -> FfiError {
 /// `shell_extent` = half-width of the sampled band in σ, default 6, `distribution` gpss |
 /// beckmann, `alpha*`, `lengthscale*`, `material`, `eta`, `k`, `specular_reflectance`) plus
 /// `memory` (renewal | renewal_plus, default renewal_plus) and `step_correlation` (default 0.95).
+/// The medium's domain applies, and the march is bounded: parameters whose march across the band
+/// at normal incidence would take more than 1e4 samples (`alpha` above about 377 at the defaults)
+/// are refused, naming what to change.
 ///
 /// # Safety
 /// `params` must be a live handle (or NULL); `out_gpis` NULL or valid for writes.
@@ -173,6 +180,13 @@ pub unsafe extern "C" fn mf_gpis_envelope(gpis: *const mf_gpis, field: *const mf
 /// failure (`MF_ERROR_CALLBACK`) or invalid parameters (a `sigma` above the field's
 /// `sigma_max`, a non-positive-definite anisotropy, ...) — nothing is written then.
 ///
+/// An on-surface start whose realization enters at once (Renewal forgets the slope at the start;
+/// with Renewal+ a direction into the remembered surface, e.g. a shadow ray) reports its crossing
+/// at a small `t > 0` (at most 2^-16 of a march step). A NaN or infinite answer of `sdf` ends the
+/// call with `MF_ERROR_INVALID_ARGUMENT` at most 5 calls after it; with `memory = renewal_plus`,
+/// `start.gradient` must lie within 40 standard deviations of the prior slope at `origin` (any
+/// gradient a previous `mf_gpis_hit` returned does) and is checked before the march.
+///
 /// # Safety
 /// Pointers must be NULL or valid; `sdf` and the field's callbacks must be safe to call with
 /// `user_data` from this thread.
@@ -201,36 +215,62 @@ pub unsafe extern "C" fn mf_gpis_trace(
         if !(t_max > 0.0) {
             return Err(invalid(format!("t_max must be > 0 (or +inf), got {t_max}")));
         }
-        let state = match start.kind {
-            MF_GPIS_START_FREE => StartState::Uncorrelated,
-            MF_GPIS_START_ON_SURFACE => {
-                let grad = DVec3::from(start.gradient);
-                if !grad.is_finite() {
-                    return Err(invalid(format!("start.gradient must be finite, got {grad}")));
-                }
-                StartState::OnSurface { gradient: (g.inner.memory == crate::gpis::Memory::RenewalPlus).then_some(grad) }
-            }
-            other => return Err(invalid(format!("start.kind must be MF_GPIS_START_FREE or MF_GPIS_START_ON_SURFACE, got {other}"))),
-        };
         let slot = out(out_hit, "out_hit")?;
         let mean = CallbackMean { sdf, user_data, failed: Cell::new(false) };
-        let mut rng = Pcg32::new(seed, 0x6d66_6770_6973); // "mfgpis"
-        let uniform = &mut || rng.next_f64();
         let trace = match field_arg(field) {
-            None => g.inner.trace(&mean, &Constant, origin, d, t_max, &state, uniform),
-            Some(f) => g.inner.trace(&mean, &CallbackField::new(f, user_data), origin, d, t_max, &state, uniform),
+            None => trace_with_field(&g.inner, &mean, &Constant, origin, d, t_max, start, seed),
+            Some(f) => trace_with_field(&g.inner, &mean, &CallbackField::new(f, user_data), origin, d, t_max, start, seed),
         };
-        // A failed mean may also have misled the field: it is the first cause.
-        if mean.failed.get() {
-            return Err(invalid("the sdf callback returned a NaN or infinite value".into()));
-        }
         let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-        *slot = match trace? {
-            Trace::Hit(c) => mf_gpis_hit { hit: true, t: c.t, point: c.point.into(), normal: c.normal.into(), gradient: c.gradient.into(), local: (&c.local).into() },
-            Trace::Miss | Trace::Exhausted { .. } => mf_gpis_hit { hit: false, t: 0.0, point: zero, normal: zero, gradient: zero, local: mf_local_params::NONE },
+        *slot = match trace {
+            Ok(Trace::InvalidMean { point }) => {
+                return Err(invalid(format!("the sdf callback returned a NaN or infinite value or gradient at {point}")))
+            }
+            // A failed mean may also have misled the field: it is the first cause.
+            _ if mean.failed.get() => return Err(invalid("the sdf callback returned a NaN or infinite value or gradient".into())),
+            Ok(Trace::Hit(c)) => mf_gpis_hit { hit: true, t: c.t, point: c.point.into(), normal: c.normal.into(), gradient: c.gradient.into(), local: (&c.local).into() },
+            Ok(Trace::Miss | Trace::Exhausted { .. }) => mf_gpis_hit { hit: false, t: 0.0, point: zero, normal: zero, gradient: zero, local: mf_local_params::NONE },
+            Err(e) => return Err(e.into()),
         };
         Ok(())
     })
+}
+
+/// The body of [`mf_gpis_trace`] once its arguments are checked: the start state (a Renewal+
+/// start gradient checked against the field's local prior first) and the march.
+#[allow(clippy::too_many_arguments)]
+fn trace_with_field<F: MediumField>(
+    gpis: &GpisSurface,
+    mean: &CallbackMean,
+    field: &F,
+    origin: DVec3,
+    d: DVec3,
+    t_max: f64,
+    start: &mf_gpis_start,
+    seed: u64,
+) -> crate::error::Result<Trace> {
+    let state = match start.kind {
+        MF_GPIS_START_FREE => StartState::Uncorrelated,
+        MF_GPIS_START_ON_SURFACE => {
+            let grad = DVec3::from(start.gradient);
+            if !grad.is_finite() {
+                return Err(Error::new(ErrorKind::InvalidArgument, format!("start.gradient must be finite, got {grad}")));
+            }
+            let remember = gpis.memory == crate::gpis::Memory::RenewalPlus;
+            if remember {
+                gpis.check_start_gradient(mean, field, origin, grad)?;
+            }
+            StartState::OnSurface { gradient: remember.then_some(grad) }
+        }
+        other => {
+            return Err(Error::new(
+                ErrorKind::InvalidArgument,
+                format!("start.kind must be MF_GPIS_START_FREE or MF_GPIS_START_ON_SURFACE, got {other}"),
+            ))
+        }
+    };
+    let mut rng = Pcg32::new(seed, 0x6d66_6770_6973); // "mfgpis"
+    gpis.trace(mean, field, origin, d, t_max, &state, &mut || rng.next_f64())
 }
 
 /// Specular reflection at a crossing: `wi` (pointing away, `wi = -d`) about the unit `normal`,

@@ -165,8 +165,10 @@ pub(super) fn uniform(name: impl std::fmt::Display, u: f64) -> FfiResult<f64> {
     }
 }
 
-/// Creates a medium from named parameters (see the README's parameter table). On failure nothing
-/// is written to `*out_medium` and [`super::mf_last_error_message`] names the parameter.
+/// Creates a medium from named parameters (see the README's parameter table). Values outside
+/// the domain stated there (e.g. `sigma` outside [1e-50, 1e50]) are refused with the reason. On
+/// failure nothing is written to `*out_medium` and [`super::mf_last_error_message`] names the
+/// parameter.
 ///
 /// # Safety
 /// `params` must be a live handle (or NULL); `out_medium` NULL or valid for writes.
@@ -420,14 +422,24 @@ pub(crate) fn phase_sample_with(m: &MacrofacetMedium, fr: &Frame, wi: mf_vec3, u
     for (i, u) in u.iter().enumerate() {
         uniform(format_args!("u[{i}]"), *u)?;
     }
-    Ok(match m.phase.sample(wi, u) {
-        Some(s) => mf_phase_sample_result { wo: fr.to_world(s.wo).into(), weight: rgb(s.weight), pdf: s.pdf, valid: true },
+    // The pdf and weight are those of the world-space `wo` the host gets back, taken to the
+    // local frame as `mf_phase_pdf` will take it: then `mf_phase_pdf(frame, wi, sample.wo)` is the
+    // sample's pdf bit for bit (issue 9 item 7).
+    let sample = m.phase.sample_direction(wi, u).and_then(|wo| {
+        let wo_world: mf_vec3 = fr.to_world(wo).into();
+        let record = m.phase.sample_record(wi, local_direction(fr, "wo", wo_world).ok()?)?;
+        Some((wo_world, record))
+    });
+    Ok(match sample {
+        Some((wo, s)) => mf_phase_sample_result { wo, weight: rgb(s.weight), pdf: s.pdf, valid: true },
         None => mf_phase_sample_result { wo: DVec3::ZERO.into(), weight: rgb([0.0; 3]), pdf: 0.0, valid: false },
     })
 }
 
 /// Samples a scattering direction from `wi` (pointing away from the event) with
-/// [`MF_PHASE_SAMPLE_DIMENSIONS`] uniform numbers in `[0, 1)` read from `u`.
+/// [`MF_PHASE_SAMPLE_DIMENSIONS`] uniform numbers in `[0, 1)` read from `u`. A valid sample's
+/// `pdf` is what [`mf_phase_pdf`] returns for the same medium, frame, `wi` and the returned `wo`,
+/// bit for bit, and `pdf > 0`; `weight` is [`mf_phase_eval`] divided by it (to rounding).
 ///
 /// # Safety
 /// Pointers must be NULL or valid; `u` must hold `MF_PHASE_SAMPLE_DIMENSIONS` doubles.

@@ -16,7 +16,8 @@ pub struct TransmittanceEstimate {
     pub transmittance: Vec<f64>,
     /// Binomial standard error `√(T(1−T)/N)` of each value.
     pub standard_error: Vec<f64>,
-    /// Realizations whose march was exhausted (counted as not crossed); 0 in normal use.
+    /// Realizations whose march was exhausted or met a non-finite mean (counted as not
+    /// crossed); 0 in normal use.
     pub exhausted: usize,
 }
 
@@ -39,7 +40,7 @@ pub fn transmittance_curve<M: MeanSdf, F: MediumField>(
         let t_hit = match tracer.trace(origin, d, t_max, &StartState::Uncorrelated, uniform)? {
             Trace::Hit(c) => c.t,
             Trace::Miss => f64::INFINITY,
-            Trace::Exhausted { .. } => {
+            Trace::Exhausted { .. } | Trace::InvalidMean { .. } => {
                 exhausted += 1;
                 f64::INFINITY
             }
@@ -80,7 +81,7 @@ pub fn visible_normals<M: MeanSdf, F: MediumField>(
 pub enum GpisWalk {
     /// Left along `wo` (pointing away from the surface) after `bounces` reflections.
     Escaped { wo: DVec3, bounces: u32 },
-    /// Hit the bounce cap, or a march was exhausted.
+    /// Hit the bounce cap, or a march was exhausted or met a non-finite mean.
     Lost { bounces: u32 },
 }
 
@@ -103,7 +104,7 @@ pub fn mirror_random_walk<M: MeanSdf, F: MediumField>(
         let c: Crossing = match tracer.trace(o, d, f64::INFINITY, &state, uniform)? {
             Trace::Hit(c) => c,
             Trace::Miss => return Ok(GpisWalk::Escaped { wo: d, bounces }),
-            Trace::Exhausted { .. } => return Ok(GpisWalk::Lost { bounces }),
+            Trace::Exhausted { .. } | Trace::InvalidMean { .. } => return Ok(GpisWalk::Lost { bounces }),
         };
         if bounces == max_bounces {
             break;

@@ -128,6 +128,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::field::{Constant, LocalParams, MediumField};
 use crate::special::{ln_normal_cdf, probit, probit_of_ln};
 use glam::DVec3;
+use std::cell::Cell;
 
 /// The correlation between successive samples along a ray, `k(x, x+Δt d)/k(x, x)` (Sec. 4.2.1
 /// of seeds/004 spaces samples "appropriately for the given covariance function"; 0.95 gives
@@ -137,6 +138,13 @@ pub const STEP_CORRELATION: f64 = 0.95;
 pub const DEFAULT_WINDOW: usize = 64;
 /// Default relative nugget of every Cholesky factorisation ([`linalg`]).
 pub const DEFAULT_JITTER: f64 = 1e-9;
+/// Further bisection levels while a crossing's bracket still starts at an on-surface origin
+/// (`GpisTracer::locate`): 10 more halve the default bracket (`Δt/64 ≈ 0.005 l`) down to
+/// `≈ 5e-6 l`, where the difference between neighbouring values (`∝ t`) meets the noise of
+/// the `1e-9` relative nugget (`≈ 3e-5 σ`), so deeper samples would decide nothing.
+pub const EXTRA_START_LEVELS: u32 = 10;
+/// Bound of [`GpisTracer::check_start_gradient`], in standard deviations of the prior slope.
+pub const START_GRADIENT_DEVIATIONS: f64 = 40.0;
 
 /// Which state of the last crossing the next segment remembers (seeds/004 Sec. 4.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -193,6 +201,9 @@ pub enum Trace {
     Miss,
     /// The march took [`MarchSettings::max_points`] samples without deciding (reached `t`).
     Exhausted { t: f64 },
+    /// The mean ([`MeanSdf`]) returned a NaN or infinite value or gradient at `point`; the
+    /// march stopped at the first such answer.
+    InvalidMean { point: DVec3 },
 }
 
 impl Trace {
@@ -278,14 +289,22 @@ struct Conditioning<'t, M: MeanSdf, K: Covariance> {
     obs: Vec<(Functional, f64, K::Local)>,
     l: Vec<Vec<f64>>,
     alpha: Vec<f64>,
+    /// Where the mean first answered NaN or infinity, if it did.
+    invalid_mean: Cell<Option<DVec3>>,
 }
 
 impl<'t, M: MeanSdf, K: Covariance> Conditioning<'t, M, K> {
+    /// The mean of `a`; a non-finite answer of the mean is remembered in `invalid_mean` (the
+    /// march ends with [`Trace::InvalidMean`]).
     fn prior_mean(&self, a: &Functional) -> f64 {
-        match *a {
+        let value = match *a {
             Functional::Value(p) => self.mean.value(p),
             Functional::Partial(p, i) => self.mean.gradient(p)[i],
+        };
+        if !value.is_finite() && self.invalid_mean.get().is_none() {
+            self.invalid_mean.set(Some(a.point()));
         }
+        value
     }
 
     /// Variance of a functional plus its nugget (the diagonal entry of the factored matrix).
@@ -390,6 +409,20 @@ impl<'t, M: MeanSdf, K: Covariance> Conditioning<'t, M, K> {
     }
 }
 
+/// A conditioned value that came out non-finite at `p`: a non-finite mean met on the way (the
+/// march reports it as [`Trace::InvalidMean`]), else parameters whose conditional law
+/// overflows (a field's lengthscales or variances at the ends of f64's range).
+fn degenerate<M: MeanSdf, K: Covariance>(c: &Conditioning<'_, M, K>, p: DVec3) -> Result<Trace> {
+    match c.invalid_mean.get() {
+        Some(point) => Ok(Trace::InvalidMean { point }),
+        None => Err(degenerate_field(p)),
+    }
+}
+
+fn degenerate_field(p: DVec3) -> Error {
+    Error::new(ErrorKind::InvalidArgument, format!("the gpis field's parameters near {p} make the process degenerate"))
+}
+
 impl<'a, M: MeanSdf> GpisTracer<'a, M> {
     /// A stationary GPIS with default [`MarchSettings`].
     pub fn new(mean: &'a M, kernel: SeKernel) -> Self {
@@ -433,6 +466,7 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
             obs: Vec::new(),
             l: Vec::new(),
             alpha: Vec::new(),
+            invalid_mean: Cell::new(None),
         };
         if let StartState::OnSurface { gradient } = *start {
             let lo = kernel.local(origin, gradient.is_some())?;
@@ -477,6 +511,47 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
         Ok(self.trace(origin, d, t_max, start, uniform)?.crossing())
     }
 
+    /// Checks a Renewal+ start gradient before a march conditions on it: along every axis
+    /// where the slope is random at the origin, `g_i` must lie within
+    /// [`START_GRADIENT_DEVIATIONS`] standard deviations of the prior slope (`σ/l_i = α_i/√2`
+    /// for the stationary kernel, seeds/000 Eq. 4; the field's local ones otherwise) about the
+    /// mean's slope there. A crossing's sampled gradient always does (beyond 40 deviations a
+    /// normal law has mass below 1e-300); a gradient that does not — `DBL_MAX`, say — would
+    /// make every conditioned value meaningless (issue 9 item 12). One call to the mean's
+    /// gradient.
+    ///
+    /// With a varying field only finiteness is checked: the slope of the non-stationary process
+    /// (seeds/004 Eqs. 25–26) also carries the field's own variation, which a sharp step makes
+    /// arbitrarily steep (a crossing at a σ step had a slope 170 prior deviations out); a march
+    /// whose conditioned values overflow fails on its own.
+    pub fn check_start_gradient(&self, origin: DVec3, gradient: DVec3) -> Result<()> {
+        if !gradient.is_finite() {
+            return Err(Error::new(ErrorKind::InvalidArgument, format!("start.gradient must be finite, got {gradient}")));
+        }
+        if self.field.varies() {
+            return Ok(());
+        }
+        let invalid = |message: String| Err(Error::new(ErrorKind::InvalidArgument, message));
+        let slope = self.mean.gradient(origin);
+        if !slope.is_finite() {
+            return invalid(format!("the sdf callback returned a NaN or infinite gradient {slope} at the origin {origin}"));
+        }
+        // σ/l_i per axis; 0 where the slope is deterministic (l_i = ∞).
+        let deviations = self.kernel.sigma * self.kernel.inverse_squared_lengths().map(f64::sqrt);
+        for i in 0..3 {
+            let deviation = deviations[i];
+            let z = (gradient[i] - slope[i]).abs() / deviation;
+            if deviation > 0.0 && !(z <= START_GRADIENT_DEVIATIONS) {
+                return invalid(format!(
+                    "start.gradient component {i} = {} lies {z:.3e} standard deviations ({deviation}) from the mean's slope {} at \
+                     the origin: no crossing of this process has that gradient (pass the gradient of the previous mf_gpis_hit)",
+                    gradient[i], slope[i]
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Marches one segment (module documentation, steps 1–5). Invalid input (non-finite origin or
     /// direction, zero direction, NaN `t_max`) gives [`Trace::Miss`]; `d` is normalised. Fails
     /// only when the field does (a callback's failure, invalid parameters, a `σ` above its
@@ -490,10 +565,7 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
         // overflow; such a crossing is an error, never a NaN.
         if let Trace::Hit(c) = trace {
             if !(c.t.is_finite() && c.point.is_finite() && c.gradient.is_finite()) {
-                return Err(Error::new(
-                    ErrorKind::InvalidArgument,
-                    format!("the gpis field's parameters near {} make the process degenerate (crossing {c:?})", c.point),
-                ));
+                return Err(degenerate_field(c.point));
             }
         }
         Ok(trace)
@@ -504,8 +576,29 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
         if !origin.is_finite() || t_max.is_nan() || !(t_max > 0.0) {
             return Ok(Trace::Miss);
         }
-        let env = self.settings.envelope * kernel.region_sigma();
         let mut c = self.conditioning(kernel, origin, start)?;
+        let trace = self.march_conditioned(kernel, &mut c, origin, d, t_max, start, uniform);
+        // A non-finite mean met as a prior mean of the conditioning (the memory, a sample)
+        // overrides whatever the march concluded from it.
+        match c.invalid_mean.get() {
+            Some(point) => Ok(Trace::InvalidMean { point }),
+            None => trace,
+        }
+    }
+
+    /// The body of [`Self::march`] for a unit `d` and valid `origin`, `t_max`.
+    #[allow(clippy::too_many_arguments)]
+    fn march_conditioned<K: Covariance>(
+        &self,
+        kernel: &K,
+        c: &mut Conditioning<'_, M, K>,
+        origin: DVec3,
+        d: DVec3,
+        t_max: f64,
+        start: &StartState,
+        uniform: &mut impl FnMut() -> f64,
+    ) -> Result<Trace> {
+        let env = self.settings.envelope * kernel.region_sigma();
         let mut t = 0.0;
         // The kernel's data where the march stands (its step starts there).
         let mut here;
@@ -519,10 +612,17 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
                 for _ in 0..10_000 {
                     let x = origin + t * d;
                     let m = self.mean.value(x);
+                    if !m.is_finite() {
+                        return Ok(Trace::InvalidMean { point: x });
+                    }
                     if !(m > env + 1e-3 * kernel.region_sigma()) {
                         break;
                     }
-                    if d.dot(self.mean.gradient(x)) >= 0.0 {
+                    let grad = self.mean.gradient(x);
+                    if !grad.is_finite() {
+                        return Ok(Trace::InvalidMean { point: x });
+                    }
+                    if d.dot(grad) >= 0.0 {
                         return Ok(Trace::Miss);
                     }
                     t += m - env;
@@ -532,6 +632,9 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
                 }
                 let x = origin + t * d;
                 let m = self.mean.value(x);
+                if !m.is_finite() {
+                    return Ok(Trace::InvalidMean { point: x });
+                }
                 here = kernel.local(x, false)?;
                 let sigma = kernel.sigma(&here);
                 let f0 = if *start == StartState::Uncorrelated {
@@ -540,18 +643,19 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
                     let ln_tail = ln_normal_cdf(-a);
                     let v = 1.0 - uniform(); // (0, 1]
                     let zz = -probit_of_ln(v.ln() + ln_tail);
-                    if zz.is_finite() {
-                        m + sigma * zz.max(a)
-                    } else {
-                        m.max(0.0) + f64::MIN_POSITIVE
-                    }
+                    // f = m + σ z > 0 for z > a, but with the mean far inside (m ≪ −σ) the excess
+                    // σ (z − a) ~ σ/a lies below the rounding of m and the sum can come out ≤ 0
+                    // (found by fuzzing: a free start reported a hit at t = 0); the smallest
+                    // positive value is then the truncated sample as f64 resolves it.
+                    let f = if zz.is_finite() { m + sigma * zz.max(a) } else { m.max(0.0) };
+                    f.max(f64::MIN_POSITIVE)
                 } else {
                     m + sigma * standard_normal(uniform)
                 };
                 c.append(Functional::Value(x), here, f0, None);
                 if f0 <= 0.0 {
                     // Unconditioned start inside: the "crossing" is the origin itself.
-                    return Ok(Trace::Hit(self.sample_normal(&mut c, x, t, d, uniform)?));
+                    return self.sample_normal(c, x, t, d, uniform);
                 }
                 f0
             }
@@ -573,13 +677,26 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
                 x = origin + t_next * d;
                 there = kernel.local(x, false)?;
             }
-            if self.mean.value(x) > env && d.dot(self.mean.gradient(x)) >= 0.0 {
-                return Ok(Trace::Miss);
+            let mu = self.mean.value(x);
+            if !mu.is_finite() {
+                return Ok(Trace::InvalidMean { point: x });
+            }
+            if mu > env {
+                let grad = self.mean.gradient(x);
+                if !grad.is_finite() {
+                    return Ok(Trace::InvalidMean { point: x });
+                }
+                if d.dot(grad) >= 0.0 {
+                    return Ok(Trace::Miss);
+                }
             }
             c.evict_if_needed();
             let f = c.sample_value(x, there, uniform);
+            if !f.is_finite() || c.invalid_mean.get().is_some() {
+                return degenerate(c, x);
+            }
             if f <= 0.0 {
-                return Ok(Trace::Hit(self.locate(&mut c, origin, d, (t, f_prev), (t_next, f), uniform)?));
+                return self.locate(c, origin, d, (t, f_prev), (t_next, f), uniform);
             }
             t = t_next;
             f_prev = f;
@@ -593,6 +710,15 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
 
     /// Conditioned bisection of the bracket `a = (t_a, f_a ≥ 0)`, `b = (t_b, f_b ≤ 0)`, linear
     /// interpolation, then the normal.
+    ///
+    /// `f_a = 0` only at the start of an on-surface segment (the conditioning `f(o) = 0`) whose
+    /// realization is not positive anywhere in the first bracket: it enters at once (Renewal
+    /// forgets the slope at the start; a direction into the remembered surface does so with
+    /// Renewal+, e.g. a shadow ray). Interpolating from `(0, 0)` would report `t = 0`, which the
+    /// ABI promises never to do (issue 9 item 6). The bisection then goes on, at most
+    /// [`EXTRA_START_LEVELS`] levels deeper, while the left end is still the start, and if it
+    /// stays there the crossing is reported at the right end `t_b > 0`, the nearest point known
+    /// to be inside.
     fn locate<K: Covariance>(
         &self,
         c: &mut Conditioning<'_, M, K>,
@@ -601,19 +727,32 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
         a: (f64, f64),
         b: (f64, f64),
         uniform: &mut impl FnMut() -> f64,
-    ) -> Result<Crossing> {
+    ) -> Result<Trace> {
         let ((mut ta, mut fa), (mut tb, mut fb)) = (a, b);
-        for _ in 0..self.settings.bisection_levels {
+        let levels = self.settings.bisection_levels;
+        for level in 0..levels + EXTRA_START_LEVELS {
+            if level >= levels && fa != 0.0 {
+                break;
+            }
             let tm = 0.5 * (ta + tb);
+            if !(tm > ta && tm < tb) {
+                break; // no representable point left between the ends
+            }
             let p = origin + tm * d;
             let f = c.sample_value(p, c.kernel.local(p, false)?, uniform);
+            if !f.is_finite() {
+                return degenerate(c, p);
+            }
             if f > 0.0 {
                 (ta, fa) = (tm, f);
             } else {
                 (tb, fb) = (tm, f);
             }
         }
-        let tc = if fa - fb > 0.0 { ta + (tb - ta) * (fa / (fa - fb)).clamp(0.0, 1.0) } else { tb };
+        let interpolated = if fa - fb > 0.0 { ta + (tb - ta) * (fa / (fa - fb)).clamp(0.0, 1.0) } else { tb };
+        // `interpolated = 0` only from a left end at the start with `f_a = 0` (or one that
+        // underflows); see above.
+        let tc = if interpolated > 0.0 { interpolated } else { tb };
         let xc = origin + tc * d;
         c.append(Functional::Value(xc), c.kernel.local(xc, false)?, 0.0, None);
         self.sample_normal(c, xc, tc, d, uniform)
@@ -621,7 +760,7 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
 
     /// Draws `∇f(xc)` given every observation, with `d · ∇f < 0` (truncated normal), and builds
     /// the crossing.
-    fn sample_normal<K: Covariance>(&self, c: &mut Conditioning<'_, M, K>, xc: DVec3, tc: f64, d: DVec3, uniform: &mut impl FnMut() -> f64) -> Result<Crossing> {
+    fn sample_normal<K: Covariance>(&self, c: &mut Conditioning<'_, M, K>, xc: DVec3, tc: f64, d: DVec3, uniform: &mut impl FnMut() -> f64) -> Result<Trace> {
         let lc = c.kernel.local(xc, true)?;
         let targets = [(Functional::Partial(xc, 0), lc), (Functional::Partial(xc, 1), lc), (Functional::Partial(xc, 2), lc)];
         let (mean, cov) = c.predict(&targets);
@@ -656,10 +795,14 @@ impl<'a, M: MeanSdf, F: MediumField> GpisTracer<'a, M, F> {
             let mut normal = || standard_normal(uniform);
             DVec3::from_slice(&linalg::sample_psd(&mean, &cov, 3, &mut normal))
         };
+        if !g.is_finite() {
+            // The conditional law of the gradient uses the mean's gradient at `xc`.
+            return Ok(Trace::InvalidMean { point: xc });
+        }
         let mut n = g.try_normalize().unwrap_or(-d);
         if n.dot(d) > 0.0 {
             n = -n;
         }
-        Ok(Crossing { t: tc, point: xc, gradient: g, normal: n, local: c.kernel.params(&lc) })
+        Ok(Trace::Hit(Crossing { t: tc, point: xc, gradient: g, normal: n, local: c.kernel.params(&lc) }))
     }
 }

@@ -12,6 +12,7 @@ use crate::phase::{reflect, MicroBsdf};
 use crate::Rgb;
 use glam::DVec3;
 
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GpisSurface {
     pub kernel: SeKernel,
@@ -47,6 +48,12 @@ impl GpisSurface {
         uniform: &mut impl FnMut() -> f64,
     ) -> Result<Trace> {
         self.tracer(mean, field).trace(origin, d, t_max, start, uniform)
+    }
+
+    /// Checks a Renewal+ start gradient before a march conditions on it
+    /// ([`GpisTracer::check_start_gradient`]), with the kernel's local parameters from `field`.
+    pub fn check_start_gradient<M: MeanSdf, F: MediumField>(&self, mean: &M, field: &F, origin: DVec3, gradient: DVec3) -> Result<()> {
+        self.tracer(mean, field).check_start_gradient(origin, gradient)
     }
 
     /// Specular reflection at a crossing with outward normal `n` whose field parameters are

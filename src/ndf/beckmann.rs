@@ -3,7 +3,8 @@
 
 use super::gaussian_gradient::GaussianGradient;
 use super::MicrofacetDistribution;
-use crate::error::{check_positive, Result};
+use crate::error::Result;
+use crate::limits::check_roughness;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -14,12 +15,10 @@ pub struct Beckmann {
 }
 
 impl Beckmann {
-    /// `alpha_u` along the local tangent `x`, `alpha_v` along `y`; both finite and `> 0`.
+    /// `alpha_u` along the local tangent `x`, `alpha_v` along `y`; both within
+    /// [`crate::limits::ROUGHNESS_RANGE`].
     pub fn new(alpha_u: f64, alpha_v: f64) -> Result<Beckmann> {
-        Ok(Beckmann {
-            alpha_u: check_positive("alpha_u", alpha_u, false)?,
-            alpha_v: check_positive("alpha_v", alpha_v, false)?,
-        })
+        Ok(Beckmann { alpha_u: check_roughness("parameter \"alpha_u\"", alpha_u)?, alpha_v: check_roughness("parameter \"alpha_v\"", alpha_v)? })
     }
 
     pub(super) fn gradient(&self) -> GaussianGradient {
@@ -29,13 +28,18 @@ impl Beckmann {
 
 impl MicrofacetDistribution for Beckmann {
     /// `D(m) = exp(-(m_x²/α_u² + m_y²/α_v²)/m_z²) / (π α_u α_v m_z⁴)` for `m_z > 0`.
+    ///
+    /// Formed as one exponential `exp(−e − 4 ln m_z)`: toward the horizon `exp(−e)` underflows
+    /// and `m_z⁴` underflows with it (`m_z ≲ 1e-81`), and their quotient would be `0/0` = NaN;
+    /// the exponent `−e − 4 ln m_z` is `−∞` or finite, never NaN, and `D → 0` there is the limit.
     fn d(&self, m: DVec3) -> f64 {
         if m.z <= 0.0 {
             return 0.0;
         }
-        let cos2 = m.z * m.z;
-        let e = ((m.x / self.alpha_u).powi(2) + (m.y / self.alpha_v).powi(2)) / cos2;
-        (-e).exp() / (PI * self.alpha_u * self.alpha_v * cos2 * cos2)
+        let tilt = (m.x / self.alpha_u).powi(2) + (m.y / self.alpha_v).powi(2);
+        // `tilt = 0` only at the pole (`m_z = 1`), where `e = 0` (not `0/0` when `m_z²` underflows).
+        let e = if tilt == 0.0 { 0.0 } else { tilt / (m.z * m.z) };
+        (-e - 4.0 * m.z.ln()).exp() / (PI * self.alpha_u * self.alpha_v)
     }
 
     /// Eq. 32 with `alpha_z = 0`: the Beckmann projected area `(1 + Λ(w)) cos θ_w`.

@@ -1,7 +1,8 @@
 //! The anisotropic GGX / Trowbridge–Reitz distribution, the "artist choice" of seeds/000 Sec. 4.1.
 
 use super::MicrofacetDistribution;
-use crate::error::{check_positive, Result};
+use crate::error::Result;
+use crate::limits::check_roughness;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -12,11 +13,9 @@ pub struct Ggx {
 }
 
 impl Ggx {
+    /// Both roughnesses within [`crate::limits::ROUGHNESS_RANGE`].
     pub fn new(alpha_u: f64, alpha_v: f64) -> Result<Ggx> {
-        Ok(Ggx {
-            alpha_u: check_positive("alpha_u", alpha_u, false)?,
-            alpha_v: check_positive("alpha_v", alpha_v, false)?,
-        })
+        Ok(Ggx { alpha_u: check_roughness("parameter \"alpha_u\"", alpha_u)?, alpha_v: check_roughness("parameter \"alpha_v\"", alpha_v)? })
     }
 
     /// The "stretch" that maps the GGX ellipsoid to the unit sphere (Heitz 2018).

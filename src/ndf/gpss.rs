@@ -6,7 +6,8 @@
 use super::beckmann::Beckmann;
 use super::gaussian_gradient::GaussianGradient;
 use super::MicrofacetDistribution;
-use crate::error::{check_positive, Result};
+use crate::error::Result;
+use crate::limits::{check_alpha_z, check_roughness};
 use crate::special::{erfc, erfcx};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -20,11 +21,13 @@ pub struct Gpss {
 }
 
 impl Gpss {
+    /// The in-plane roughnesses within [`crate::limits::ROUGHNESS_RANGE`], `alpha_z` 0 or within
+    /// `[ALPHA_Z_MIN, ROUGHNESS_RANGE.1]`.
     pub fn new(alpha_x: f64, alpha_y: f64, alpha_z: f64) -> Result<Gpss> {
         Ok(Gpss {
-            alpha_x: check_positive("alpha_u", alpha_x, false)?,
-            alpha_y: check_positive("alpha_v", alpha_y, false)?,
-            alpha_z: check_positive("alpha_z", alpha_z, true)?,
+            alpha_x: check_roughness("parameter \"alpha_u\"", alpha_x)?,
+            alpha_y: check_roughness("parameter \"alpha_v\"", alpha_y)?,
+            alpha_z: check_alpha_z("parameter \"alpha_z\"", alpha_z)?,
         })
     }
 

@@ -28,7 +28,10 @@ impl BeckmannUniformMixture {
     }
 
     /// Samples `m` with `u[0]` choosing the strategy (and then reused, rescaled, for it).
+    /// `None` when no flake is visible from `wi` ([`MicrofacetDistribution::visible_area`]): the
+    /// uniform strategy would otherwise return normals of zero `D_wi` and a `0/0` weight.
     pub fn sample(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
+        self.ndf.visible_area(wi)?;
         if u[0] < self.ratio {
             let u0 = u[0] / self.ratio;
             self.ndf.beckmann().sample_visible(wi, [u0, u[1], u[2]])
@@ -38,8 +41,9 @@ impl BeckmannUniformMixture {
     }
 
     /// `P(m) = R P_Beckmann(m) + (1 − R) / (2π)` on the hemisphere around `wi` (Eq. 40).
+    /// Zero when no flake is visible from `wi`, as [`Self::sample`] then returns nothing.
     pub fn pdf(&self, wi: DVec3, m: DVec3) -> f64 {
-        if wi.dot(m) <= 0.0 {
+        if wi.dot(m) <= 0.0 || self.ndf.visible_area(wi).is_none() {
             return 0.0;
         }
         self.ratio * self.ndf.beckmann().pdf_visible(wi, m) + (1.0 - self.ratio) / (2.0 * PI)

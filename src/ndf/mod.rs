@@ -41,6 +41,15 @@ pub trait MicrofacetDistribution {
     /// `∫ <w, m> D(m) dm`, the area of the flakes seen from `w` per unit macro-area.
     fn projected_area(&self, w: DVec3) -> f64;
 
+    /// [`Self::projected_area`]`(wi)` when flakes are visible from `wi`; `None` when it is below
+    /// the smallest normal `f64`. There `D_wi = <wi, m> D / σ(wi)` (Eq. 12) is `0/0` or has
+    /// lost its precision, and the visible-normal samplers find nothing: every density, value and
+    /// sample of the phase function treats such a `wi` as seeing no flake.
+    fn visible_area(&self, wi: DVec3) -> Option<f64> {
+        let area = self.projected_area(wi);
+        (area >= f64::MIN_POSITIVE).then_some(area)
+    }
+
     /// Smith's `Lambda(w)`, extended to the whole sphere. Infinite at the horizon.
     /// Identity used: `Lambda(w) cos θ_w = projected_area(-w)` (Eq. 8 with `d = w`).
     fn lambda(&self, w: DVec3) -> f64 {
@@ -75,9 +84,11 @@ pub trait MicrofacetDistribution {
         if cos <= 0.0 {
             return 0.0;
         }
+        // cos (D / area): the product cos D underflows for grazing m before the quotient does;
+        // an area below the smallest normal f64 sees no flake (as in `visible_area`).
         let area = self.sampling_projected_area(wi);
-        if area > 0.0 {
-            cos * self.d(m) / area
+        if area >= f64::MIN_POSITIVE {
+            cos * (self.d(m) / area)
         } else {
             0.0
         }

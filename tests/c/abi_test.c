@@ -803,7 +803,7 @@ static void test_reference_values(void) {
   EXPECT_OK(mf_medium_sigma_t(m, &FRAME_Z, 0.1, d, &x));
   CHECK_REL(x, 5.981797510962255e-3, 1e-12);
   EXPECT_OK(mf_medium_majorant(m, &FRAME_Z, 0.3, -0.4, d, &x));
-  CHECK_REL(x, 1.2116498973963784e-2, 1e-12);
+  CHECK_REL(x, 1.2116498973963784e-2 * (1.0 + 1e-12), 1e-12); /* sigma_t at the lower end, MAJORANT_ROUNDING */
   EXPECT_OK(mf_medium_optical_depth(m, &FRAME_Z, -0.2, d, 1.5, &x));
   CHECK_REL(x, 7.440225196802669e-3, 1e-12);
   EXPECT_OK(mf_medium_transmittance(m, &FRAME_Z, -0.2, d, 1.5, &x));

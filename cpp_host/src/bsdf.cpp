@@ -234,6 +234,94 @@ private:
     Rgb r_, t_;
 };
 
+/// Mitsuba's roughdielectric: microfacet reflection and refraction at a rough interface of
+/// relative index eta = int_ior / ext_ior (Walter et al. 2007, "Microfacet Models for Refraction
+/// through Rough Surfaces", Eqs. 20-21 for f, 14 and 17 for the half-vector Jacobians), two-sided
+/// (wo.z < 0 is inside). Sampling: a visible normal m of the side wo is on, then reflection with
+/// probability F(<wo, m>), else refraction; the weight of radiance crossing into the medium of
+/// index ratio eta_t / eta_i is scaled by (eta_i / eta_t)^2 (solid angle compression).
+class RoughDielectric final : public Bsdf {
+public:
+    RoughDielectric(float eta, std::shared_ptr<const Texture> r, std::shared_ptr<const Texture> t, MicrofacetType type,
+                    float au, float av, bool vis)
+        : eta_(eta), r_(std::move(r)), t_(std::move(t)), mf_(type, au, av, vis) {}
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        float pdf;
+        return eval_pdf(uv, wo, wi, &pdf);
+    }
+    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        float pdf;
+        eval_pdf(uv, wo, wi, &pdf);
+        return pdf;
+    }
+    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z == 0) return false;
+        const float side = wo.z > 0 ? 1.0f : -1.0f;
+        float mpdf;
+        Vec3 m = mf_.sample(wo * side, u, &mpdf);  // on the +z side
+        if (!(mpdf > 0)) return false;
+        float cos_t;
+        const float c = dot(wo, m);
+        const float F = fresnel_dielectric(c, eta_, &cos_t);
+        Vec3 wi;
+        if (u_lobe <= F) {
+            wi = m * (2.0f * c) - wo;
+            if (wi.z * wo.z <= 0) return false;
+        } else {
+            // refraction about m: eta_ti = index on the wo side / index on the wi side
+            float eta_ti = c > 0 ? 1.0f / eta_ : eta_;
+            wi = m * (c * eta_ti - (c > 0 ? cos_t : -cos_t)) - wo * eta_ti;
+            if (wi.z * wo.z >= 0) return false;
+        }
+        float pdf;
+        Rgb f = eval_pdf(uv, wo, wi, &pdf);
+        if (!(pdf > 0) || !std::isfinite(pdf)) return false;
+        s->wi = wi;
+        s->pdf = pdf;
+        s->weight = f / pdf;
+        s->delta = false;
+        s->transmission = wi.z * wo.z < 0;
+        // relative IOR crossed: index on the wi side / index on the wo side
+        s->eta = s->transmission ? (wo.z > 0 ? eta_ : 1.0f / eta_) : 1.0f;
+        return s->weight.finite();
+    }
+    std::string name() const override { return "roughdielectric"; }
+
+private:
+    /// f |cos wi| and the pdf of sample() (Mitsuba's eval / pdf, radiance transport).
+    Rgb eval_pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi, float* pdf_out) const {
+        *pdf_out = 0.0f;
+        if (wo.z == 0 || wi.z == 0) return Rgb(0.0f);
+        const bool reflect = wo.z * wi.z > 0;
+        const float eta = wo.z > 0 ? eta_ : 1.0f / eta_;  // index on the wi side / wo side when refracting
+        Vec3 m = normalize(wo + wi * (reflect ? 1.0f : eta));
+        if (m.z < 0) m = -m;
+        const float cw = dot(wo, m), ci = dot(wi, m);
+        // a microfacet seen from the back by either direction contributes nothing (Smith G1 = 0)
+        if (cw * wo.z <= 0 || ci * wi.z <= 0) return Rgb(0.0f);
+        const float D = mf_.D(m), G = mf_.G(wo, wi, m);
+        const float F = fresnel_dielectric(cw, eta_, nullptr);
+        const float side = wo.z > 0 ? 1.0f : -1.0f;
+        float pdf_m = mf_.pdf(wo * side, m);
+        Rgb value;
+        if (reflect) {
+            value = Rgb(F * D * G / (4.0f * std::fabs(wo.z)));
+            if (r_) value *= r_->eval(uv);
+            *pdf_out = pdf_m * F / (4.0f * std::fabs(ci));
+        } else {
+            const float denom = cw + eta * ci;
+            const float jac = eta * eta * std::fabs(ci) / (denom * denom);  // dm / dwi (Walter Eq. 17)
+            value = Rgb(std::fabs((1.0f - F) * D * G * cw * ci / (wo.z * denom * denom)));  // includes 1/eta^2
+            if (t_) value *= t_->eval(uv);
+            *pdf_out = pdf_m * (1.0f - F) * jac;
+        }
+        return value;
+    }
+    float eta_;
+    std::shared_ptr<const Texture> r_, t_;
+    Microfacet mf_;
+};
+
 /// Mitsuba's thindielectric: a thin slab with two parallel interfaces; light either reflects
 /// (mirror) or passes straight through. With the Fresnel reflectance R of one interface, the
 /// slab's total reflectance sums the inter-reflections: R' = R + T^2 R / (1 - R^2), T = 1 - R.
@@ -346,6 +434,102 @@ private:
     float fdr_int_;
 };
 
+/// Mitsuba's roughplastic: a rough dielectric coating (isotropic microfacet reflection, Fresnel
+/// F, Smith G) over a diffuse base seen through it. The base's light is attenuated on the way in
+/// and out by the coating's rough transmittance t(cos) (the directional transmittance of the
+/// rough interface, Microfacet::eval_transmittance), tabulated at 64 cosines in [0, 1] (the first
+/// at 1e-6) and interpolated linearly, and its internal reflections are summed with the
+/// hemispherical average R_i = 2 mean(r(mu) mu) of the interface's reflectance from inside,
+/// over the same 64 cosines, as Mitsuba does:
+///   f = F D G / (4 cos_i cos_o) + R_d / (1 - R_i) (or R_d / (1 - R_d R_i), nonlinear)
+///       t(cos_i) t(cos_o) / (eta^2 pi).
+/// The glossy lobe is sampled with probability (1 - t_i) w_s / ((1 - t_i) w_s + t_i (1 - w_s)),
+/// w_s = mean specular / (mean specular + mean diffuse reflectance).
+class RoughPlastic final : public Bsdf {
+public:
+    static constexpr int kTableSize = 64;
+    RoughPlastic(float eta, std::shared_ptr<const Texture> diffuse, std::shared_ptr<const Texture> specular, bool nonlinear,
+                 MicrofacetType type, float alpha, bool sample_visible)
+        : eta_(eta), diffuse_(std::move(diffuse)), specular_(std::move(specular)), nonlinear_(nonlinear),
+          mf_(type, alpha, alpha, sample_visible) {
+        float s_mean = specular_ ? specular_->mean() : 1.0f, d_mean = diffuse_->mean();
+        spec_weight_ = s_mean + d_mean > 0 ? s_mean / (s_mean + d_mean) : 0.5f;
+        double internal = 0;
+        for (int i = 0; i < kTableSize; ++i) {
+            float mu = std::max(1e-6f, float(i) / float(kTableSize - 1));
+            Vec3 wi(std::sqrt(1 - mu * mu), 0.0f, mu);
+            external_t_[i] = mf_.eval_transmittance(wi, eta_);
+            internal += double(mf_.eval_reflectance(wi, 1.0f / eta_)) * mu;
+        }
+        internal_r_ = float(2.0 * internal / kTableSize);
+    }
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
+        return eval_cos(uv, wo, wi);
+    }
+    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0 || wi.z <= 0) return 0.0f;
+        return pdf_cos(wo, wi);
+    }
+    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+        if (wo.z <= 0) return false;
+        Vec3 wi;
+        if (u_lobe < prob_specular(wo.z)) {
+            float mpdf;
+            Vec3 m = mf_.sample(wo, u, &mpdf);
+            wi = m * (2.0f * dot(wo, m)) - wo;
+        } else {
+            wi = cosine_hemisphere(u);
+        }
+        if (wi.z <= 0) return false;
+        s->wi = wi;
+        s->pdf = pdf_cos(wo, wi);
+        if (!(s->pdf > 0) || !std::isfinite(s->pdf)) return false;
+        s->weight = eval_cos(uv, wo, wi) / s->pdf;
+        s->delta = false;
+        s->transmission = false;
+        s->eta = 1.0f;
+        return s->weight.finite();
+    }
+    std::string name() const override { return "roughplastic"; }
+
+private:
+    /// t(cos) from the table (linear interpolation; cos in [0, 1]).
+    float external_t(float c) const {
+        float x = c * float(kTableSize - 1);
+        int i = std::min(int(x), kTableSize - 2);
+        float f = x - float(i);
+        return (1.0f - f) * external_t_[i] + f * external_t_[i + 1];
+    }
+    float prob_specular(float cos_o) const {
+        float t = external_t(cos_o);
+        float ps = (1.0f - t) * spec_weight_, pd = t * (1.0f - spec_weight_);
+        return ps + pd > 0 ? ps / (ps + pd) : 0.0f;
+    }
+    float pdf_cos(const Vec3& wo, const Vec3& wi) const {
+        float p_s = prob_specular(wo.z);
+        Vec3 h = normalize(wo + wi);
+        float d = dot(wi, h);
+        float spec = d > 0 ? mf_.pdf(wo, h) / (4.0f * d) : 0.0f;
+        return p_s * spec + (1.0f - p_s) * wi.z * kInvPi;
+    }
+    Rgb eval_cos(const Vec2& uv, const Vec3& wo, const Vec3& wi) const {
+        Vec3 h = normalize(wo + wi);
+        float spec = fresnel_dielectric(dot(wo, h), eta_, nullptr) * mf_.D(h) * mf_.G(wo, wi, h) / (4.0f * wo.z);
+        Rgb value = specular_ ? specular_->eval(uv) * spec : Rgb(spec);
+        Rgb d = diffuse_->eval(uv);
+        for (int c = 0; c < 3; ++c) d[c] /= 1.0f - (nonlinear_ ? d[c] * internal_r_ : internal_r_);
+        return value + d * (kInvPi / (eta_ * eta_) * wi.z * external_t(wo.z) * external_t(wi.z));
+    }
+    float eta_;
+    std::shared_ptr<const Texture> diffuse_, specular_;
+    bool nonlinear_;
+    Microfacet mf_;
+    float spec_weight_ = 0.5f;
+    float external_t_[kTableSize];
+    float internal_r_ = 0;
+};
+
 class NullBsdf final : public Bsdf {
 public:
     Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
@@ -397,12 +581,22 @@ std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {
     return std::make_shared<Dielectric>(int_ior / ext_ior, r, t);
 }
+std::shared_ptr<Bsdf> make_rough_dielectric(float int_ior, float ext_ior, std::shared_ptr<const Texture> r,
+                                            std::shared_ptr<const Texture> t, MicrofacetType type, float au, float av, bool vis) {
+    return std::make_shared<RoughDielectric>(int_ior / ext_ior, std::move(r), std::move(t), type, au, av, vis);
+}
 std::shared_ptr<Bsdf> make_thin_dielectric(float int_ior, float ext_ior, const Rgb& r, const Rgb& t) {
     return std::make_shared<ThinDielectric>(int_ior / ext_ior, r, t);
 }
 std::shared_ptr<Bsdf> make_plastic(float int_ior, float ext_ior, std::shared_ptr<const Texture> diffuse,
                                    const Rgb& specular, bool nonlinear, float specular_sampling_weight) {
     return std::make_shared<Plastic>(int_ior / ext_ior, std::move(diffuse), specular, nonlinear, specular_sampling_weight);
+}
+std::shared_ptr<Bsdf> make_rough_plastic(float int_ior, float ext_ior, std::shared_ptr<const Texture> diffuse,
+                                        std::shared_ptr<const Texture> specular, bool nonlinear, MicrofacetType type,
+                                        float alpha, bool sample_visible) {
+    return std::make_shared<RoughPlastic>(int_ior / ext_ior, std::move(diffuse), std::move(specular), nonlinear, type, alpha,
+                                          sample_visible);
 }
 std::shared_ptr<Bsdf> make_null_bsdf() { return std::make_shared<NullBsdf>(); }
 std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> f, std::shared_ptr<Bsdf> b) {

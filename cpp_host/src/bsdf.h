@@ -65,12 +65,22 @@ std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_
 std::shared_ptr<Bsdf> make_rough_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> specular_reflectance,
                                            std::shared_ptr<const LibraryMicrofacet> distribution);
 std::shared_ptr<Bsdf> make_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);
+/// Mitsuba's roughdielectric (microfacet reflection and refraction, Walter et al. 2007);
+/// `reflectance` / `transmittance` may be null (no factor).
+std::shared_ptr<Bsdf> make_rough_dielectric(float int_ior, float ext_ior, std::shared_ptr<const Texture> reflectance,
+                                            std::shared_ptr<const Texture> transmittance, MicrofacetType type, float alpha_u,
+                                            float alpha_v, bool sample_visible);
 /// Mitsuba's thindielectric (a thin slab: mirror reflection or straight transmission).
 std::shared_ptr<Bsdf> make_thin_dielectric(float int_ior, float ext_ior, const Rgb& refl, const Rgb& trans);
 /// Mitsuba's plastic (smooth coating over a diffuse base; see bsdf.cpp).
 std::shared_ptr<Bsdf> make_plastic(float int_ior, float ext_ior, std::shared_ptr<const Texture> diffuse,
                                    const Rgb& specular, bool nonlinear, float specular_sampling_weight);
 float fresnel_diffuse_reflectance(float eta);
+/// Mitsuba's roughplastic (rough coating over a diffuse base; see bsdf.cpp). `specular` may be
+/// null (Mitsuba's default: no factor, mean 1).
+std::shared_ptr<Bsdf> make_rough_plastic(float int_ior, float ext_ior, std::shared_ptr<const Texture> diffuse,
+                                         std::shared_ptr<const Texture> specular, bool nonlinear, MicrofacetType type,
+                                         float alpha, bool sample_visible);
 std::shared_ptr<Bsdf> make_null_bsdf();
 std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> front, std::shared_ptr<Bsdf> back);
 

@@ -254,6 +254,7 @@ int mfrender_main(int argc, char** argv) {
         // Every problem of the file is reported in one run: the reader's and the builder's.
         ErrorSink problems;
         ParsedScene parsed = parse_scene_file(scene_path, defines, &problems);
+        for (const std::string& w : parsed.warnings) std::fprintf(stderr, "mfrender: warning: %s\n", w.c_str());
         bopts.allow_macrofacet_placeholders = false;  // --check validates macrofacet parameters too
         bopts.validate_only = check;  // spatially varying parameters: validated, not rendered yet
         BuildReport report;

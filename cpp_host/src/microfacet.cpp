@@ -1,6 +1,10 @@
 // mfhost — microfacet distributions (see microfacet.h).
 #include "microfacet.h"
 
+#include <vector>
+
+#include "bsdf.h"  // fresnel_dielectric
+
 namespace mf {
 
 float Microfacet::D(const Vec3& m) const {
@@ -73,6 +77,76 @@ Vec3 Microfacet::sample_visible_ggx(const Vec3& wi, const Vec2& u) const {
     p2 = (1.0f - s) * std::sqrt(std::max(0.0f, 1.0f - p1 * p1)) + s * p2;
     Vec3 nh = t1 * p1 + t2 * p2 + vh * std::sqrt(std::max(0.0f, 1.0f - p1 * p1 - p2 * p2));
     return normalize(Vec3(au_ * nh.x, av_ * nh.y, std::max(1e-6f, nh.z)));
+}
+
+namespace {
+
+/// Gauss-Legendre nodes and weights of order n on [-1, 1] (Newton on the Legendre recurrence;
+/// nodes accurate to 1e-15).
+void gauss_legendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
+    nodes->assign(size_t(n), 0.0);
+    weights->assign(size_t(n), 0.0);
+    for (int i = 0; i < (n + 1) / 2; ++i) {
+        double x = std::cos(3.14159265358979323846 * (i + 0.75) / (n + 0.5)), dp = 1;
+        for (int it = 0; it < 100; ++it) {
+            double p0 = 1, p1 = x;  // P_0, P_1
+            for (int k = 2; k <= n; ++k) {
+                double pk = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+                p0 = p1;
+                p1 = pk;
+            }
+            dp = n * (x * p1 - p0) / (x * x - 1);  // P_n'
+            double dx = p1 / dp;
+            x -= dx;
+            if (std::fabs(dx) < 1e-15) break;
+        }
+        double w = 2 / ((1 - x * x) * dp * dp);
+        (*nodes)[size_t(i)] = -x;
+        (*nodes)[size_t(n - 1 - i)] = x;
+        (*weights)[size_t(i)] = (*weights)[size_t(n - 1 - i)] = w;
+    }
+}
+
+}  // namespace
+
+/// The n x n Gauss-Legendre quadrature of g(m) over the visible normals m of wi (uniform on the
+/// unit square of visible-normal samples), n = 32 for eta > 1 and 128 otherwise.
+template <typename G>
+static double integrate_visible_normals(const Microfacet& visible, const Vec3& wi, float eta, G&& g) {
+    const int n = eta > 1 ? 32 : 128;
+    std::vector<double> x, w;
+    gauss_legendre(n, &x, &w);
+    double sum = 0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            Vec2 u(float(0.5 * x[size_t(i)] + 0.5), float(0.5 * x[size_t(j)] + 0.5));
+            float pdf;
+            Vec3 m = visible.sample(wi, u, &pdf);
+            sum += double(g(m)) * w[size_t(i)] * w[size_t(j)] * 0.25;
+        }
+    return sum;
+}
+
+float Microfacet::eval_reflectance(const Vec3& wi, float eta) const {
+    if (!(wi.z > 0)) return 0.0f;
+    Microfacet visible(type_, au_, av_, true, height_correlated_);
+    return float(integrate_visible_normals(visible, wi, eta, [&](const Vec3& m) {
+        float c = dot(wi, m);
+        Vec3 wo = m * (2.0f * c) - wi;
+        return wo.z > 0 ? fresnel_dielectric(c, eta, nullptr) * G1(wo, m) : 0.0f;
+    }));
+}
+
+float Microfacet::eval_transmittance(const Vec3& wi, float eta) const {
+    if (!(wi.z > 0)) return 0.0f;
+    Microfacet visible(type_, au_, av_, true, height_correlated_);
+    return float(integrate_visible_normals(visible, wi, eta, [&](const Vec3& m) {
+        float c = dot(wi, m), cos_t;
+        float F = fresnel_dielectric(c, eta, &cos_t);
+        float eta_ti = c > 0 ? 1.0f / eta : eta;  // index ratio (wi side / far side)
+        Vec3 wt = m * (c * eta_ti - (c > 0 ? cos_t : -cos_t)) - wi * eta_ti;
+        return wt.z * wi.z < 0 ? (1.0f - F) * G1(wt, m) : 0.0f;
+    }));
 }
 
 namespace {

@@ -36,6 +36,20 @@ public:
     Vec3 sample(const Vec3& wi, const Vec2& u, float* pdf) const;
     float pdf(const Vec3& wi, const Vec3& m) const;
     MicrofacetType type() const { return type_; }
+    float alpha_u() const { return au_; }
+    float alpha_v() const { return av_; }
+
+    /// Directional albedo of the rough dielectric interface of relative index eta seen from wi
+    /// (wi.z > 0): the integral of F(<wi, m>) G1(wo, m) over the visible normals m of wi, with
+    /// wo the mirror direction of wi about m (Mitsuba's eval_reflectance: the unit square of
+    /// visible-normal samples integrated by an n x n Gauss-Legendre rule, n = 32 for eta > 1
+    /// and 128 otherwise, where total internal reflection makes the integrand kinked).
+    /// Uses visible-normal sampling whatever sample_visible is.
+    float eval_reflectance(const Vec3& wi, float eta) const;
+    /// The same for the light refracted through the interface: the integral of
+    /// (1 - F(<wi, m>)) G1(wt, m) with wt the refraction of wi about m (Mitsuba's
+    /// eval_transmittance, same quadrature).
+    float eval_transmittance(const Vec3& wi, float eta) const;
 
 private:
     Vec3 sample_visible_ggx(const Vec3& wi, const Vec2& u) const;

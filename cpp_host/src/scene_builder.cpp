@@ -164,39 +164,40 @@ private:
                     bsdfs_[&o] = b;
                     return b;
                 }
-                MicrofacetType mt;
-                if (dist == "beckmann") mt = MicrofacetType::Beckmann;
-                else if (dist == "ggx") mt = MicrofacetType::GGX;
-                else throw perr(o, "distribution", "must be \"beckmann\", \"ggx\" or \"gtr\", got \"" + dist + "\"");
-                float au, av;
-                if (o.has("alpha_u") || o.has("alpha_v")) {
-                    if (o.has("alpha")) throw err(o, "specify either alpha or alpha_u/alpha_v, not both");
-                    if (!o.has("alpha_u") || !o.has("alpha_v")) throw err(o, "alpha_u and alpha_v must both be given");
-                    au = roughness(o, "alpha_u");
-                    av = roughness(o, "alpha_v");
-                } else {
-                    au = av = o.has("alpha") ? roughness(o, "alpha") : 0.1f;
-                }
-                bool vis = o.get_bool("sample_visible", true);
+                MicrofacetParams mp = microfacet_params(o, "\"beckmann\", \"ggx\" or \"gtr\"");
                 // mfrender extension: Smith masking-shadowing form (Mitsuba: separable)
                 std::string shadowing = o.get_string("shadowing", "separable");
                 if (shadowing != "separable" && shadowing != "height_correlated")
                     throw perr(o, "shadowing", "must be \"separable\" or \"height_correlated\", got \"" + shadowing + "\"");
-                b = make_rough_conductor(ior, spec, mt, au, av, vis, shadowing == "height_correlated");
+                b = make_rough_conductor(ior, spec, mp.type, mp.alpha_u, mp.alpha_v, mp.sample_visible,
+                                         shadowing == "height_correlated");
             }
         } else if (t == "dielectric" || t == "thindielectric") {
             float ni = ior_value(o, "int_ior", "bk7"), ne = ior_value(o, "ext_ior", "air");
             Rgb r = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f)), tr = nonneg_rgb(o, "specular_transmittance", Rgb(1.0f));
             b = t == "dielectric" ? make_dielectric(ni, ne, r, tr) : make_thin_dielectric(ni, ne, r, tr);
+        } else if (t == "roughdielectric") {
+            auto [ni, ne] = interface_iors(o, "bk7");
+            auto r = optional_texture(o, "specular_reflectance"), tr = optional_texture(o, "specular_transmittance");
+            MicrofacetParams mp = microfacet_params(o);
+            b = make_rough_dielectric(ni, ne, r, tr, mp.type, mp.alpha_u, mp.alpha_v, mp.sample_visible);
         } else if (t == "plastic") {
-            float ni = ior_value(o, "int_ior", "polypropylene"), ne = ior_value(o, "ext_ior", "air");
+            auto [ni, ne] = interface_iors(o, "polypropylene");
             auto diffuse = texture_param(o, "diffuse_reflectance", Rgb(0.5f));
             Rgb spec = nonneg_rgb(o, "specular_reflectance", Rgb(1.0f));
             bool nonlinear = o.get_bool("nonlinear", false);
             // Mitsuba: the specular lobe's sampling weight from the mean reflectances
-            float d_mean = diffuse->constant() ? diffuse->constant()->average() : 0.5f * diffuse->max_value();
-            float s_mean = spec.average();
+            float d_mean = diffuse->mean(), s_mean = spec.average();
             b = make_plastic(ni, ne, diffuse, spec, nonlinear, s_mean + d_mean > 0 ? s_mean / (s_mean + d_mean) : 0.5f);
+        } else if (t == "roughplastic") {
+            auto [ni, ne] = interface_iors(o, "polypropylene");
+            auto diffuse = texture_param(o, "diffuse_reflectance", Rgb(0.5f));
+            auto spec = optional_texture(o, "specular_reflectance");
+            bool nonlinear = o.get_bool("nonlinear", false);
+            MicrofacetParams mp = microfacet_params(o);
+            if (mp.alpha_u != mp.alpha_v)
+                throw err(o, "roughplastic does not support anisotropic roughness (as in Mitsuba); give alpha");
+            b = make_rough_plastic(ni, ne, diffuse, spec, nonlinear, mp.type, mp.alpha_u, mp.sample_visible);
         } else if (t == "null") {
             b = make_null_bsdf();
         } else if (t == "twosided") {
@@ -208,7 +209,7 @@ private:
             b = make_twosided(f, bk);
         } else {
             throw err(o, "unsupported BSDF plugin \"" + t +
-                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, plastic, null, twosided)");
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided)");
         }
         o.check_all_used();
         bsdfs_[&o] = b;
@@ -311,6 +312,46 @@ private:
                 if (o.has(n) && msg.find("\"" + n + "\"") != std::string::npos) throw perr(o, n, msg);
             throw err(o, msg);
         }
+    }
+
+    /// Mitsuba's MicrofacetDistribution(props): distribution beckmann (default) | ggx, alpha
+    /// (default 0.1) or alpha_u and alpha_v, sample_visible (default true).
+    struct MicrofacetParams {
+        MicrofacetType type = MicrofacetType::Beckmann;
+        float alpha_u = 0.1f, alpha_v = 0.1f;
+        bool sample_visible = true;
+    };
+    /// `choices` names every distribution the caller accepts (roughconductor also takes the
+    /// library's, handled before).
+    MicrofacetParams microfacet_params(const SceneObject& o, const std::string& choices = "\"beckmann\" or \"ggx\"") {
+        MicrofacetParams mp;
+        std::string dist = o.get_string("distribution", "beckmann");
+        if (dist == "beckmann") mp.type = MicrofacetType::Beckmann;
+        else if (dist == "ggx") mp.type = MicrofacetType::GGX;
+        else throw perr(o, "distribution", "must be " + choices + ", got \"" + dist + "\"");
+        if (o.has("alpha_u") || o.has("alpha_v")) {
+            if (o.has("alpha")) throw err(o, "specify either alpha or alpha_u/alpha_v, not both");
+            if (!o.has("alpha_u") || !o.has("alpha_v")) throw err(o, "alpha_u and alpha_v must both be given");
+            mp.alpha_u = roughness(o, "alpha_u");
+            mp.alpha_v = roughness(o, "alpha_v");
+        } else if (o.has("alpha")) {
+            mp.alpha_u = mp.alpha_v = roughness(o, "alpha");
+        }
+        mp.sample_visible = o.get_bool("sample_visible", true);
+        return mp;
+    }
+
+    /// int_ior / ext_ior of a dielectric interface (Mitsuba: both positive and different).
+    std::pair<float, float> interface_iors(const SceneObject& o, const std::string& int_default) {
+        float ni = ior_value(o, "int_ior", int_default), ne = ior_value(o, "ext_ior", "air");
+        if (ni == ne) throw err(o, "int_ior and ext_ior must differ (Mitsuba refuses an interface that does not refract)");
+        return {ni, ne};
+    }
+
+    /// An optional texture parameter (null when absent: Mitsuba's "no factor").
+    std::shared_ptr<const Texture> optional_texture(const SceneObject& o, const std::string& name) {
+        if (!o.has(name) && !o.child_named("texture", name)) return nullptr;
+        return texture_param(o, name, Rgb(1.0f));
     }
 
     float roughness(const SceneObject& o, const std::string& name) {

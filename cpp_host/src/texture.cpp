@@ -17,6 +17,7 @@ public:
         return ValueRange::of(v, 3);
     }
     const Rgb* constant() const override { return &v_; }
+    float mean() const override { return v_.average(); }
 
 private:
     Rgb v_;
@@ -42,6 +43,7 @@ public:
         r.include(c1_->range_uv(lo, hi));
         return r;
     }
+    float mean() const override { return 0.5f * (c0_->mean() + c1_->mean()); }  // half the squares each
 
 private:
     std::shared_ptr<Texture> c0_, c1_;
@@ -51,7 +53,12 @@ private:
 class BitmapTexture final : public Texture {
 public:
     BitmapTexture(std::vector<float> rgb, int w, int h, BitmapFilter f, WrapMode m, const UvTransform& t)
-        : texels_(std::move(rgb), w, h, 1, 3), w_(w), h_(h), filter_(f), wrap_(m), t_(t) {}
+        : texels_(std::move(rgb), w, h, 1, 3), w_(w), h_(h), filter_(f), wrap_(m), t_(t) {
+        double sum = 0;
+        for (float v : texels_.values()) sum += v;
+        mean_ = texels_.values().empty() ? 0.0f : float(sum / double(texels_.values().size()));
+    }
+    float mean() const override { return mean_; }
     Rgb eval(const Vec2& uv_in) const override {
         Vec2 uv = t_.apply(uv_in);
         float x = uv.x * float(w_), y = uv.y * float(h_);
@@ -93,6 +100,7 @@ private:
         return Rgb(t[0], t[1], t[2]);
     }
     SampleGrid texels_;  // row 0 = v 0
+    float mean_ = 0;
     int w_, h_;
     BitmapFilter filter_;
     WrapMode wrap_;

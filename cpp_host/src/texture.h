@@ -34,6 +34,9 @@ public:
     }
     /// Non-null for a constant texture.
     virtual const Rgb* constant() const { return nullptr; }
+    /// The mean value over uv and channels (Mitsuba's Texture::mean(): BSDFs weigh their lobes'
+    /// sampling probabilities by it).
+    virtual float mean() const = 0;
 };
 
 /// Mitsuba's to_uv: a 2D affine map given as a 4x4 <transform> (its x/y rows and columns).

@@ -16,6 +16,8 @@
 
 #include <pugixml.hpp>
 
+#include "spectrum.h"
+
 namespace mf {
 
 const char* prop_type_name(PropType t) {
@@ -292,6 +294,7 @@ public:
     ParsedScene parse(const std::string& text, const std::string& path) {
         ParsedScene out;
         out.main_file = path;
+        warnings_ = &out.warnings;
         out.root = std::make_shared<SceneObject>();
         out.root->tag = "scene";
         FileCtx ctx{path, dirname_of(path), text, {}, 0};
@@ -346,6 +349,7 @@ private:
     std::vector<PendingRef> pending_;
     std::vector<std::string> include_stack_;
     std::shared_ptr<std::vector<std::string>> search_path_;
+    std::vector<std::string>* warnings_ = nullptr;  // ParsedScene::warnings
     size_t total_bytes_ = 0;
     bool upgrade_ = false;  // current file is pre-2.0.0
     uint64_t hash_ = 0xcbf29ce484222325ull;
@@ -531,7 +535,10 @@ private:
         return m;
     }
 
-    Property parse_property(const FileCtx& ctx, const pugi::xml_node& n, bool unbounded_rgb) {
+    Property parse_property(const FileCtx& ctx, const pugi::xml_node& n, const std::string& parent_tag) {
+        // Emitters' radiances and volumes' data (e.g. an anisotropy matrix's entries) are not
+        // reflectances: their <rgb> may leave [0, 1].
+        const bool unbounded_rgb = parent_tag == "emitter" || parent_tag == "volume";
         std::string k = n.name();
         Property p;
         p.loc = loc(ctx, n);
@@ -556,8 +563,10 @@ private:
         }
         p.name = name_attr(ctx, n, true);
         const std::string where = "<" + k + " name=" + quote(p.name) + ">";
-        if (k == "spectrum" && has_attr(n, "filename"))
-            throw Error(p.loc, where + ": spectra from files are not supported (use <rgb> or an inline value)");
+        if (k == "spectrum") {
+            parse_spectrum(ctx, n, parent_tag, where, &p);
+            return p;
+        }
         std::string v = attr(ctx, n, "value");
         if (k == "integer") {
             p.type = PropType::Integer;
@@ -586,17 +595,58 @@ private:
             else if (c.size() == 3) p.rgb = Rgb(float(c[0]), float(c[1]), float(c[2]));
             else throw Error(p.loc, where + ": expected 1 or 3 components, got " + quote(v));
             check_bounded(p, where, unbounded_rgb);
-        } else if (k == "spectrum") {
-            p.type = PropType::Rgb;
-            p.from_spectrum = true;
-            if (v.find(':') != std::string::npos)
-                throw Error(p.loc, where + ": wavelength:value lists are not supported (use <rgb>)");
-            std::vector<double> c = parse_numbers(ctx, n, v, "spectrum value");
-            if (c.size() != 1)
-                throw Error(p.loc, where + ": only a single-valued <spectrum> is supported (use <rgb> for colours)");
-            p.rgb = Rgb(float(c[0]));
         }
         return p;
+    }
+
+    /// <spectrum value="v"> (a constant), value="wl:v, wl:v, ..." or filename="x.spd", converted to
+    /// RGB as Mitsuba 3's RGB variants do (spectrum.h): in an emitter as emission, else as a
+    /// reflectance (clamped to [0, 1]) unless the name is an index of refraction.
+    void parse_spectrum(const FileCtx& ctx, const pugi::xml_node& n, const std::string& parent_tag, const std::string& where,
+                        Property* p) {
+        p->type = PropType::Rgb;
+        p->from_spectrum = true;
+        const SpectrumUse use = parent_tag == "emitter" ? SpectrumUse::Emission
+                                : is_unbounded_spectrum(p->name) ? SpectrumUse::Unbounded
+                                                                 : SpectrumUse::Reflectance;
+        if (has_attr(n, "value") == has_attr(n, "filename"))
+            throw Error(p->loc, where + ": needs exactly one of \"value\" and \"filename\"");
+        SampledSpectrum s;
+        if (has_attr(n, "filename")) {
+            std::string name = attr(ctx, n, "filename");
+            SceneObject probe;
+            probe.dir = ctx.dir;
+            probe.search_path = search_path_;
+            std::string path = probe.resolve_path(name);
+            if (!is_file(path)) throw Error(p->loc, where + ": spectrum file " + quote(path, 200) + " not found");
+            try {
+                s = read_spectrum_file(path);
+            } catch (const Error& e) {
+                throw Error(p->loc, where + ": " + e.what());
+            }
+        } else {
+            std::string v = attr(ctx, n, "value");
+            if (v.find(':') == std::string::npos) {
+                std::vector<double> c = parse_numbers(ctx, n, v, "spectrum value");
+                if (c.size() != 1)
+                    throw Error(p->loc, where + ": a constant spectrum has one value (wavelength:value pairs for a list, "
+                                                "<rgb> for colours), got " + quote(v));
+                p->rgb = constant_spectrum_to_rgb(c[0], use);
+                return;
+            }
+            try {
+                s = parse_spectrum_pairs(v);
+            } catch (const Error& e) {
+                throw Error(p->loc, where + ": " + e.what());
+            }
+        }
+        bool clamped = false;
+        p->rgb = sampled_spectrum_to_rgb(s, use, &clamped);
+        if (clamped)
+            warnings_->push_back(p->loc.str() + ": " + where + ": the spectrum's sRGB colour lies outside " +
+                                 (use == SpectrumUse::Reflectance ? "[0, 1]" : "[0, inf)") + " and was clamped to (" +
+                                 std::to_string(p->rgb.r) + ", " + std::to_string(p->rgb.g) + ", " + std::to_string(p->rgb.b) +
+                                 ") as Mitsuba's RGB variants do");
     }
 
     /// Mitsuba's RGB variants turn an <rgb> outside an emitter into an sRGB reflectance
@@ -658,9 +708,7 @@ private:
         std::string k = c.name();
         if (kPropertyTags.count(k)) {
             if (at_root) throw Error(loc(ctx, c), "property <" + k + "> is not allowed directly inside <scene>");
-            // Emitters' radiances and volumes' data (e.g. an anisotropy matrix's entries) are
-            // not reflectances: their <rgb> may leave [0, 1].
-            Property p = parse_property(ctx, c, parent.tag == "emitter" || parent.tag == "volume");
+            Property p = parse_property(ctx, c, parent.tag);
             if (!names.insert(p.name).second) {
                 SourceLoc first = parent.loc_of(p.name);
                 throw Error(p.loc, parent.describe() + ": parameter " + quote(p.name) +

@@ -108,6 +108,8 @@ struct ParsedScene {
     std::string version;
     bool upgraded = false;  // a pre-2.0.0 scene upgraded in memory (camelCase names etc.)
     uint64_t content_hash = 0;  // FNV-1a of every XML file read and the -D values (shard checks)
+    /// What Mitsuba accepts with a warning (e.g. a spectrum clamped to [0, 1]), "file:line: ...".
+    std::vector<std::string> warnings;
 };
 
 using Defines = std::vector<std::pair<std::string, std::string>>;

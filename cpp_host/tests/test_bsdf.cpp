@@ -152,4 +152,51 @@ TEST_CASE(diffuse_and_dielectric) {
     CHECK(g->sample(wo, 0.0f, Vec2(), &bs) && !bs.transmission && bs.wi.z > 0);
 }
 
+// Rough dielectric (both sides, both distributions) and rough plastic: the pdf reported by
+// sample() equals pdf(), and the directional albedo of sampling (mean weight) equals the
+// integral of eval() over the sphere by uniform sampling (5 standard errors + 2e-3).
+TEST_CASE(rough_dielectric_and_plastic_consistency) {
+    struct Config { std::shared_ptr<Bsdf> bsdf; const char* name; };
+    auto white = make_constant_texture(Rgb(1.0f));
+    const Config cfgs[] = {
+        {make_rough_dielectric(1.5f, 1.0f, nullptr, nullptr, MicrofacetType::Beckmann, 0.3f, 0.3f, true), "roughdielectric beckmann"},
+        {make_rough_dielectric(1.33f, 1.0f, nullptr, nullptr, MicrofacetType::GGX, 0.5f, 0.2f, true), "roughdielectric ggx aniso"},
+        {make_rough_dielectric(1.5f, 1.0f, nullptr, nullptr, MicrofacetType::GGX, 0.2f, 0.2f, false), "roughdielectric ggx D"},
+        {make_rough_plastic(1.49f, 1.0f, make_constant_texture(Rgb(0.5f, 0.3f, 0.1f)), nullptr, false, MicrofacetType::Beckmann,
+                            0.1f, true), "roughplastic beckmann"},
+        {make_rough_plastic(1.9f, 1.0f, make_constant_texture(Rgb(0.8f)), white, true, MicrofacetType::GGX, 0.4f, true),
+         "roughplastic ggx nonlinear"},
+    };
+    const Vec3 wos[] = {normalize(Vec3(0.1f, 0.0f, 1.0f)), normalize(Vec3(0.6f, 0.5f, 0.4f)), normalize(Vec3(-0.9f, 0.2f, 0.15f)),
+                        normalize(Vec3(0.3f, -0.2f, -0.8f)), normalize(Vec3(0.7f, 0.1f, -0.3f))};
+    const int N = 200000;
+    for (const Config& c : cfgs) {
+        for (const Vec3& wo : wos) {
+            Est alb_s, alb_u;
+            int pdf_mismatch = 0;
+            Sampler s(4, 5, 6);
+            for (int i = 0; i < N; ++i) {
+                Vec2 u = s.next_2d();
+                float z = 1 - 2 * u.x, r = safe_sqrt(1 - z * z), phi = 2 * kPi * u.y;
+                Vec3 wi(r * std::cos(phi), r * std::sin(phi), z);
+                alb_u.add(c.bsdf->eval(wo, wi).g * 4 * M_PI);
+                BsdfSample bs;
+                if (c.bsdf->sample(wo, s.next_1d(), s.next_2d(), &bs)) {
+                    alb_s.add(bs.weight.g);
+                    float p = c.bsdf->pdf(wo, bs.wi);
+                    if (std::fabs(p - bs.pdf) > 1e-3f * std::max(1.0f, p)) ++pdf_mismatch;
+                } else {
+                    alb_s.add(0.0);
+                }
+            }
+            std::string tag = std::string(c.name) + " wo.z=" + std::to_string(wo.z);
+            CHECK_MSG(pdf_mismatch == 0, tag + " pdf mismatches: " + std::to_string(pdf_mismatch));
+            double diff = std::fabs(alb_s.mean() - alb_u.mean());
+            double tol = 5 * std::sqrt(alb_s.se() * alb_s.se() + alb_u.se() * alb_u.se()) + 2e-3;
+            CHECK_MSG(diff < tol, tag + " albedo sampled " + std::to_string(alb_s.mean()) + " vs integrated " +
+                                      std::to_string(alb_u.mean()) + " (tol " + std::to_string(tol) + ")");
+        }
+    }
+}
+
 TEST_MAIN()

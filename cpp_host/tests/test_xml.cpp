@@ -305,4 +305,54 @@ TEST_CASE(mitsuba_scene_conventions) {
     parse("<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"2, 1, 1\"/></bsdf><emitter type=\"constant\"><rgb name=\"radiance\" value=\"5\"/></emitter>");
 }
 
+TEST_CASE(spectra_as_mitsuba_rgb_variants) {
+    // Reference values: Mitsuba 3.9.1 scalar_rgb (diffuse reflectance and constant-emitter
+    // radiance of the same <spectrum>, evaluated through its Python API); the conversion is a
+    // deterministic sum, so 1e-5 covers float rounding only.
+    auto value = [](const std::string& xml) {
+        ParsedScene s = parse(xml);
+        const SceneObject& o = *s.root->children[0].obj;
+        return o.props[0].rgb;
+    };
+    Rgb refl = value(R"(<bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1, 500:0.5, 600:0.8, 700:0.3"/></bsdf>)");
+    CHECK_NEAR(refl.r, 0.752187, 1e-5);
+    CHECK_NEAR(refl.g, 0.645269, 1e-5);
+    CHECK_NEAR(refl.b, 0.271706, 1e-5);
+    Rgb white = value(R"(<bsdf type="diffuse"><spectrum name="reflectance" value="360:1, 830:1"/></bsdf>)");
+    CHECK_NEAR(white.r, 0.998985, 1e-5);
+    CHECK_NEAR(white.b, 0.998802, 1e-5);
+    Rgb emit = value(R"(<emitter type="constant"><spectrum name="radiance" value="400:0.1, 500:0.5, 600:0.8, 700:0.3"/></emitter>)");
+    CHECK_NEAR(emit.r, 0.883847, 1e-5);
+    CHECK_NEAR(emit.g, 0.618319, 1e-5);
+    CHECK_NEAR(emit.b, 0.236324, 1e-5);
+    // a constant spectrum: grey in a BSDF, the sRGB colour of equal energy in an emitter
+    Rgb grey = value(R"(<bsdf type="diffuse"><spectrum name="reflectance" value="0.5"/></bsdf>)");
+    CHECK(grey.r == 0.5f && grey.g == 0.5f && grey.b == 0.5f);
+    Rgb equal = value(R"(<emitter type="constant"><spectrum name="radiance" value="2"/></emitter>)");
+    CHECK_NEAR(equal.r, 2 * 1.20479, 1e-5);
+    CHECK_NEAR(equal.g, 2 * 0.948291, 1e-5);
+    CHECK_NEAR(equal.b, 2 * 0.908916, 1e-5);
+    // above 1: clamped for a reflectance (with a warning), kept for an IOR (Mitsuba: 2.79483, ...)
+    ParsedScene clamped = parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" value="400:2, 700:2"/></bsdf>)");
+    CHECK(clamped.root->children[0].obj->props[0].rgb.max() == 1.0f);
+    CHECK(clamped.warnings.size() == 1);
+    Rgb eta = value(R"(<bsdf type="conductor"><spectrum name="eta" value="400:2, 700:3"/><rgb name="k" value="1"/></bsdf>)");
+    CHECK_NEAR(eta.r, 2.79483, 1e-4);
+    CHECK_NEAR(eta.b, 2.12586, 1e-4);
+    // malformed lists are refused with the element's line
+    CHECK_THROWS_WITH(parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1, 500"/></bsdf>)"), "expected wavelength:value");
+    CHECK_THROWS_WITH(parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1"/></bsdf>)"), "at least two");
+    CHECK_THROWS_WITH(parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" filename="none.spd"/></bsdf>)"), "not found");
+    // a spectrum file (.spd): "wavelength value" lines and comments
+    {
+        std::string path = std::string(MFHOST_TEST_WORK) + "/test.spd";
+        FILE* f = std::fopen(path.c_str(), "w");
+        std::fputs("# a test spectrum\n400 0.1\n500 0.5\n\n600 0.8 # peak\n700 0.3\n", f);
+        std::fclose(f);
+        Rgb file = value("<bsdf type=\"diffuse\"><spectrum name=\"reflectance\" filename=\"" + path + "\"/></bsdf>");
+        CHECK_NEAR(file.r, 0.752187, 1e-5);
+        CHECK_NEAR(file.b, 0.271706, 1e-5);
+    }
+}
+
 TEST_MAIN()

@@ -15,7 +15,13 @@ and in mfrender, from the same files:
    thin_shell): the difference is accounted for pixel by pixel with mfrender's roughconductor
    rendered both ways with one seed (identical samples, only the G weights differ). Over the
    pixels that see the sphere at cos >= 0.35: mean within 1.5 % and 4.5 SE + 0.5 %, R < 1.3;
-4. the plugin's counters: no majorant violation, no unprepared call, no library error.
+4. spatially varying media (issue 12), the same files in both renderers (field_data.py writes
+   their grids and textures): data/varying_media.xml (sigma and roughness gridvolumes, the
+   roughness's wrap_mode repeat, a bitmap over the sphere's uv; a 6-channel anisotropy grid)
+   and data/sdf_sphere.xml (an sdfgrid mean surface), judged as in 2; the plugin's reports name
+   the wrap mode it read from the grid; and a constvolume parameter renders in the plugin exactly
+   as the number (same seed, identical images);
+5. the plugin's counters: no majorant violation, no unprepared call, no library error.
 
 Exit status 77 (skipped) without Mitsuba. usage: test_renders.py --mfrender PATH --work DIR [--runs K]"""
 import argparse
@@ -31,6 +37,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 SCENES = os.path.join(ROOT, "scenes", "mitsuba")
 sys.path.insert(0, os.path.join(ROOT, "cpp_host", "tests", "mitsuba"))
 
+import field_data  # noqa: E402
 from plugin_env import SKIPPED, Checks, mitsuba_with_plugin  # noqa: E402
 
 # (scene, -D overrides): small images, enough samples for the statistics. aniso_shell (a test
@@ -188,11 +195,44 @@ def thin_shell_vs_roughconductor(check, r, K):
     check(R < 1.3, f"thin shell vs roughconductor: per-pixel differences / noise R = {R:.3f} (< 1.3)")
 
 
+# A sphere whose roughness and tint are numbers or the same values as constvolumes: the plugin
+# must render both identically (0.3 is not a float: the constvolume keeps 0.3f, the plugin reads
+# it back as the number written). The box filter keeps every sample in its block: with Mitsuba's
+# default gaussian, blocks overlap at their borders and are summed in thread order, which
+# changes pixel values there by an ulp from one render to the next.
+CONSTANT_SCENE = """<scene version="3.0.0"><integrator type="volpath"><integer name="max_depth" value="4"/></integrator>
+    <sensor type="perspective"><transform name="to_world"><lookat origin="0, 1, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/><rfilter type="box"/></film></sensor>
+    <emitter type="point"><point name="position" x="2" y="3" z="4"/><rgb name="intensity" value="20"/></emitter>
+    <medium type="macrofacet" id="m"><float name="sigma" value="0.01"/>{params}<shape type="sphere" name="mean_surface"/></medium>
+    <shape type="sphere"><float name="radius" value="1.03"/><bsdf type="null"/><ref name="interior" id="m"/></shape></scene>"""
+NUMBERS = '<float name="alpha" value="0.3"/><rgb name="specular_reflectance" value="0.9, 0.7, 0.55"/>'
+CONSTVOLUMES = ('<volume name="alpha" type="constvolume"><float name="value" value="0.3"/></volume>'
+                '<volume name="specular_reflectance" type="constvolume"><rgb name="value" value="0.9, 0.7, 0.55"/></volume>')
+
+
+def varying_media(check, r, K):
+    mi = r.mi
+    first = len(r.media)
+    compare_scene(check, r, field_data.write_varying_media(mi, r.work), {"res": "48", "spp": "32"}, K)
+    reports = r.media[first:]
+    check(any("field alpha = <volume type=\"gridvolume\"> (2 x 4 x 2, wrap_mode repeat)" in m for m in reports)
+          and any("field sigma = <volume type=\"gridvolume\"> (8 x 2 x 2, wrap_mode clamp)" in m for m in reports),
+          "the plugin read the grids' wrap modes from Mitsuba's values: " + next((m[m.find("field"):] for m in reports if "field alpha" in m), "?"))
+    compare_scene(check, r, field_data.write_sdf_sphere(mi, r.work), {"res": "32", "spp": "16"}, K)
+    images = [list(mi.render(mi.load_string(CONSTANT_SCENE.format(params=p)), seed=5).array) for p in (NUMBERS, CONSTVOLUMES)]
+    same = sum(a == b for a, b in zip(*images))
+    check(same == len(images[0]) and sum(images[0]) > 0,
+          f"constvolumes render as the numbers: {same} of {len(images[0])} pixel values identical (same seed)")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--mfrender", required=True)
     ap.add_argument("--work", required=True)
     ap.add_argument("--runs", type=int, default=4)
+    ap.add_argument("--only", choices=("scenes", "roughconductor", "varying"), help="run one group of checks (while developing)")
     a = ap.parse_args()
     mi = mitsuba_with_plugin()
     if mi is None:
@@ -201,6 +241,7 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     check = Checks()
 
+    run = lambda group: a.only in (None, group)  # noqa: E731
     fresh = os.path.join(a.work, "fuzzy_torus_boundary.ply")
     macrofacet_mitsuba.write_enclosure(os.path.join(ROOT, "scenes", "torus.obj"), fresh, sigma=0.08, scale=2, cell_size=0.1)
     with open(fresh, "rb") as f1, open(os.path.join(SCENES, "fuzzy_torus_boundary.ply"), "rb") as f2:
@@ -208,9 +249,13 @@ def main():
                                       "(regenerate it with the command in fuzzy_torus.xml)")
 
     r = Renderers(mi, a.mfrender, a.work)
-    for scene, overrides in SCENE_RUNS:
-        compare_scene(check, r, scene, overrides, a.runs)
-    thin_shell_vs_roughconductor(check, r, a.runs)
+    if run("scenes"):
+        for scene, overrides in SCENE_RUNS:
+            compare_scene(check, r, scene, overrides, a.runs)
+    if run("roughconductor"):
+        thin_shell_vs_roughconductor(check, r, a.runs)
+    if run("varying"):
+        varying_media(check, r, a.runs)
 
     bad = [m for m in r.media if not all(f"{k} = 0" in m for k in ("majorant_violations", "unprepared_calls", "errors"))]
     check(not bad, f"plugin counters over {len(r.media)} renders: no majorant violation, unprepared call or error"

@@ -19,9 +19,15 @@ and in mfrender, from the same files:
    their grids and textures): data/varying_media.xml (sigma and roughness gridvolumes, the
    roughness's wrap_mode repeat, a bitmap over the sphere's uv; a 6-channel anisotropy grid)
    and data/sdf_sphere.xml (an sdfgrid mean surface), judged as in 2; the plugin's reports name
-   the wrap mode it read from the grid; and a constvolume parameter renders in the plugin exactly
-   as the number (same seed, identical images);
-5. the plugin's counters: no majorant violation, no unprepared call, no library error.
+   the wrap mode it read from the grid; a constvolume parameter renders in the plugin exactly
+   as the number (same seed, identical images); a piecewise-constant field (sigma and alpha per
+   half) renders each half as the stationary medium (piecewise_constant_field); the sdfgrid
+   sphere renders as the analytic sphere in the plugin;
+5. the library's GTR distribution (issue 13: distribution gtr, gamma, lambda exact or dimov)
+   passes through the plugin by name: a GTR thin shell, judged as in 2;
+6. the plugin's counters: no majorant violation, no unprepared call, no library error.
+
+--only GROUP runs one group (scenes: 1-2, roughconductor: 3, varying: 4, gtr: 5) while developing.
 
 Exit status 77 (skipped) without Mitsuba. usage: test_renders.py --mfrender PATH --work DIR [--runs K]"""
 import argparse

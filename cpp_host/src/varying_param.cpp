@@ -86,7 +86,6 @@ bool satisfies(Constraint c, float x) {
     return false;
 }
 
-/// Sylvester's criterion in double precision: the leading minors are positive.
 bool positive_definite(const double s[6]) {
     const double xx = s[0], yy = s[1], zz = s[2], xy = s[3], xz = s[4], yz = s[5];
     const double m2 = xx * yy - xy * xy;
@@ -94,8 +93,6 @@ bool positive_definite(const double s[6]) {
     return xx > 0 && m2 > 0 && det > 0;
 }
 
-/// The 8 range channels of one anisotropy sample: the 6 entries, then a lower bound of the
-/// smallest and an upper bound of the largest eigenvalue (rounded outwards to float).
 void matrix_sample(const double s[6], float out[8]) {
     for (int c = 0; c < 6; ++c) out[c] = float(s[c]);
     double lmin, lmax;

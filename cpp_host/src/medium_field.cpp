@@ -6,7 +6,7 @@
 #include <cstring>
 
 #include "library_abi.h"
-#include "medium_fields.h"
+#include "varying_param.h"
 #include "macrofacet.h"
 
 namespace mf {

@@ -78,9 +78,4 @@ double shell_top_bound(const MediumParamBag& bag);
 /// spatially varying parameter of `bag` (nothing if none varies).
 void refuse_varying_fields(const MediumParamBag& bag);
 
-/// A copy of `bag` in which every varying parameter with a scalar form is replaced by its largest
-/// value (so that the library validates the other parameters, and the largest values, as it
-/// would for a render); for mfrender --check.
-MediumParamBag stand_in_bag(const MediumParamBag& bag);
-
 }  // namespace mf

@@ -3,11 +3,12 @@
 // volpathmis in scalar_rgb.
 //
 // Scene description (README "Use in Mitsuba 3"): the medium's parameters are the README table's;
-// the mean surface is a shape nested in the medium as <shape name="mean_surface"> (Mitsuba loads
-// it; it is not part of the scene); the scene's shape whose interior is this medium is the
-// boundary through which rays enter: it must contain the region f < k sigma and have a null BSDF
-// (the sphere of radius r + k sigma, or for a mesh the enclosure that `python3 -m
-// macrofacet_mitsuba enclosure` writes). mfrender reads the same file.
+// those that may vary in space may be nested <volume>s or <texture>s instead of numbers
+// (varying_params.h); the mean surface is a shape nested in the medium as <shape
+// name="mean_surface"> (Mitsuba loads it; it is not part of the scene); the scene's shape whose
+// interior is this medium is the boundary through which rays enter: it must contain the region
+// f < k sigma and have a null BSDF (the sphere of radius r + k sigma, or for a mesh the enclosure
+// that `python3 -m macrofacet_mitsuba enclosure` writes). mfrender reads the same file.
 //
 // Tracking: the library's, as in mfrender. Mitsuba's Medium::sample_interaction (not virtual)
 // calls, on one thread and in this order, intersect_aabb(ray) for the interval [mint, maxt] of
@@ -16,7 +17,9 @@
 // probability sigma_t / majorant (else a null collision, weighted sigma_n / majorant in shadow
 // rays). Here intersect_aabb runs mf_track_free_flight along the ray (delta tracking with the
 // library's closed-form majorants: exact for the density that grows without bound below the
-// mean surface, no core or cut needed) and reports the sampled collision as the start of the
+// mean surface, no core or cut needed; with varying parameters the library asks the medium's
+// field for them at tentative collisions and for their bounds along each segment, and reports
+// them with the collision for the phase function) and reports the sampled collision as the start of the
 // interval, or no interval when the ray passes; get_majorant then returns kCertain, so large
 // that the exponential step is below float resolution (the event lands on the collision), and
 // get_scattering_coefficients confirms the event with sigma_t = sigma_s = kCertain, sigma_n = 0.
@@ -43,6 +46,7 @@
 #include "params.h"
 #include "phase.h"
 #include "shape_geometry.h"
+#include "varying_params.h"
 
 namespace mfmi {
 
@@ -59,7 +63,7 @@ template <typename Float, typename Spectrum>
 class MacrofacetMedium final : public Medium<Float, Spectrum> {
 public:
     MI_IMPORT_BASE(Medium, m_is_homogeneous, m_has_spectral_extinction, m_phase_function)
-    MI_IMPORT_TYPES(PhaseFunction, Shape)
+    MI_IMPORT_TYPES(PhaseFunction, Shape, Volume, Texture)
     static_assert(!dr::is_jit_v<Float>, "the macrofacet plugin supports scalar variants only");
 
     /// The majorant that makes Mitsuba's exponential step vanish: -log(1 - u) / kCertain < 2e-17
@@ -76,20 +80,25 @@ public:
             if (props.has_property("sample_emitters"))
                 throw std::runtime_error("parameter \"sample_emitters\" is not supported (next-event estimation is always used)");
             Shape* mean = nullptr;
+            std::vector<NestedParam> nested;
             for (const auto& prop : props.objects()) {
                 const std::string name(prop.name());
                 if (prop.template try_get<PhaseFunction>())
                     throw std::runtime_error("takes no nested <phase>: the flakes define the phase function (micro_bsdf, "
                                              "material, eta, k, reflectance, ...)");
-                if (name != kMeanSurface)
-                    throw std::runtime_error("unexpected nested object \"" + name + "\" (a macrofacet medium takes one "
-                                             "<shape name=\"" + kMeanSurface + "\">)");
-                mean = prop.template try_get<Shape>();
-                if (!mean) throw std::runtime_error(std::string("\"") + kMeanSurface + "\" must be a <shape>");
+                if (name == kMeanSurface) {
+                    mean = prop.template try_get<Shape>();
+                    if (!mean) throw std::runtime_error(std::string("\"") + kMeanSurface + "\" must be a <shape>");
+                } else if (prop.template try_get<Volume>() || prop.template try_get<Texture>()) {
+                    nested.push_back(NestedParam{name, ref<Object>(prop.template try_get<Object>())});
+                } else {
+                    throw std::runtime_error("unexpected nested object \"" + name + "\" (a macrofacet medium takes one <shape name=\"" +
+                                             kMeanSurface + "\"> and <volume>s or <texture>s of the parameters that vary in space)");
+                }
             }
             if (!mean)
                 throw std::runtime_error(std::string("needs its mean surface: nest <shape type=\"sphere\" name=\"") +
-                                         kMeanSurface + "\"> or a mesh shape (obj, ply, ...) with name=\"" + kMeanSurface + "\"");
+                                         kMeanSurface + "\">, a mesh shape (obj, ply, ...) or an sdfgrid with name=\"" + kMeanSurface + "\"");
             std::shared_ptr<const MeanSurface> surface;
             try {
                 surface = mean_surface_of(mean);
@@ -101,10 +110,37 @@ public:
                 diffuse = props.get<std::string>("micro_bsdf") == "diffuse";
                 props.mark_queried("micro_bsdf", false);  // params_of() passes it on to the library
             }
-            ParamsPtr params = params_of(props);
+            ::mf::MediumParamBag bag;
+            bag.type = "macrofacet";
+            bag.id = id;
+            ParamsPtr params = params_of(props, &bag);
+            // the base medium takes the constvolumes' numbers and every varying parameter at its
+            // largest value (mfrender's base_bag, cpp_host/src/medium_field.h): those after the
+            // numbers params_of has set
+            const size_t given = bag.params.size();
+            read_varying_params<Float, Spectrum>(nested, &bag);
+            const ::mf::MediumParamBag base = ::mf::base_bag(bag);
+            for (size_t i = given; i < base.params.size(); ++i) {
+                const auto& [name, v] = base.params[i];
+                // mfrender's bag keeps rgb in float: each channel as the number written (as_written)
+                const double rgb[3] = {as_written(v.rgb.r), as_written(v.rgb.g), as_written(v.rgb.b)};
+                const mf_status st = v.kind == ::mf::ParamValue::Kind::Rgb ? mf_params_set_rgb(params.get(), name.c_str(), rgb)
+                                                                           : mf_params_set_float(params.get(), name.c_str(), v.f);
+                if (st != MF_OK) throw std::runtime_error("parameter \"" + name + "\": " + library_error());
+            }
             mf_medium* medium = nullptr;
             if (mf_medium_new(params.get(), &medium) != MF_OK) throw std::runtime_error(library_error());
-            state_ = std::make_shared<const MediumState>(medium, std::move(surface), diffuse, label,
+            std::unique_ptr<mf_medium, MediumDeleter> owned(medium);
+            VaryingField field;
+            if (bag.fields) {
+                const ::mf::ParamValue* distribution = bag.get("distribution");
+                field.fields = bag.fields;
+                field.library = std::make_shared<const ::mf::LibraryField>(bag, !distribution || distribution->s == "gpss");
+            }
+            double top = 0;
+            check(mf_medium_shell_top(medium, &top), "mf_medium_shell_top");
+            check_fields_on_surface(field.fields.get(), *surface, top);
+            state_ = std::make_shared<const MediumState>(owned.release(), std::move(surface), std::move(field), diffuse, label,
                                                          mix64(std::hash<std::string>()(id)));
         } catch (const std::exception& e) {
             Throw("%s: %s", label, e.what());
@@ -123,7 +159,8 @@ public:
         const mf_track_query query{mf_vec3{ray.o.x(), ray.o.y(), ray.o.z()}, unit(ray.d.x(), ray.d.y(), ray.d.z()), t_max,
                                    hash_floats(key, 7, state_->seed_salt)};
         mf_collision c;
-        if (mf_track_free_flight(state_->medium, state_->surface->handle(), nullptr, nullptr, &query, &c) != MF_OK) {
+        if (mf_track_free_flight(state_->medium, state_->surface->handle(), state_->field_handle(), state_->field_user_data(), &query, &c) !=
+            MF_OK) {
             state_->errors.fetch_add(1, std::memory_order_relaxed);
             return {false, inf, inf};
         }
@@ -132,7 +169,7 @@ public:
         const Float t = Float(c.t);
         const Point3f p = ray(t);  // Mitsuba's position of the event (see kCertain)
         const float pf[3] = {p.x(), p.y(), p.z()};
-        state_->remember(pf, c.frame);
+        state_->remember(pf, c.frame, c.local);
         pending.medium_id = state_->id;
         pending.wi[0] = -ray.d.x();
         pending.wi[1] = -ray.d.y();

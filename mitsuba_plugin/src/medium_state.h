@@ -1,13 +1,16 @@
 // macrofacet for Mitsuba 3 — what the medium and its phase function share: the library's
-// medium and mean surface, the frames of recent collisions, and counters for reports.
+// medium, mean surface and field of spatially varying parameters, the recent collisions, and
+// counters for reports.
 //
-// Frames. The phase function of a macrofacet medium depends on the local frame of the mean
-// surface at the event (normal = gradient of f, tangent = dp/du; README "Conventions"). Mitsuba
-// hands a phase function only the MediumInteraction (p, wi, and sh_frame = Frame(wi), which is
-// not that frame). The tracker returns the frame with each collision; the medium remembers the
-// last few per thread by position, and the phase function looks its event up there (a shadow
-// ray traced between the collision and the phase query may add its own), recomputing the frame
-// with mf_surface_eval when it is not found.
+// Events. The phase function of a macrofacet medium depends on the local frame of the mean
+// surface at the event (normal = gradient of f, tangent = dp/du; README "Conventions") and, when
+// parameters vary in space, on their local values there. Mitsuba hands a phase function only the
+// MediumInteraction (p, wi, and sh_frame = Frame(wi), which is not that frame). The tracker
+// returns the frame and the local parameters with each collision; the medium remembers the last
+// few per thread by position, and the phase function looks its event up there (a shadow ray
+// traced between the collision and the phase query may add its own). An event not found there
+// (a call from outside volpath's sequence) gets its frame from mf_surface_eval in a stationary
+// medium; with a field its local parameters are unknown, and it is counted as unprepared.
 // Directions: Mitsuba's mi.wi points away from the event toward where the ray came from, and a
 // phase function's wo points away from the event — the library's convention exactly.
 #pragma once
@@ -18,6 +21,7 @@
 #include <sstream>
 #include <string>
 
+#include "cpp_host/src/medium_field.h"
 #include "mean_surface.h"
 
 namespace mfmi {
@@ -27,23 +31,31 @@ struct MediumDeleter {
     void operator()(mf_medium* m) const { mf_medium_free(m); }
 };
 
-/// Frames of the last collisions on this thread (MediumState::frame_at).
-struct RecentFrames {
+/// The last collisions on this thread (MediumState::event_at).
+struct RecentEvents {
     static constexpr int kSize = 4;
     struct Entry {
         uint64_t state_id = 0;
         float p[3] = {0, 0, 0};
         mf_frame frame{};
+        mf_local_params local{};
     } entries[kSize];
     int next = 0;
 };
-inline thread_local RecentFrames t_recent_frames;
+inline thread_local RecentEvents t_recent_events;
+
+/// The medium's spatially varying parameters: mfrender's fields and the library field over them
+/// (which reads them: declared first, they outlive it).
+struct VaryingField {
+    std::shared_ptr<const ::mf::MediumFields> fields;
+    std::shared_ptr<const ::mf::LibraryField> library;
+};
 
 struct MediumState {
     /// Takes ownership of `medium`.
-    MediumState(mf_medium* medium, std::shared_ptr<const MeanSurface> surface, bool diffuse_flakes, std::string label,
-                uint64_t seed_salt)
-        : owned_(medium), medium(medium), surface(std::move(surface)), diffuse_flakes(diffuse_flakes),
+    MediumState(mf_medium* medium, std::shared_ptr<const MeanSurface> surface, VaryingField field, bool diffuse_flakes,
+                std::string label, uint64_t seed_salt)
+        : owned_(medium), medium(medium), surface(std::move(surface)), field(std::move(field)), diffuse_flakes(diffuse_flakes),
           label(std::move(label)), seed_salt(seed_salt), id(next_id()) {}
     MediumState(const MediumState&) = delete;
     MediumState& operator=(const MediumState&) = delete;
@@ -54,6 +66,8 @@ private:
 public:
     const mf_medium* const medium;
     const std::shared_ptr<const MeanSurface> surface;
+    /// Empty for a stationary medium.
+    const VaryingField field;
     /// Diffuse flakes need all MF_PHASE_SAMPLE_DIMENSIONS numbers to sample; conductors three.
     const bool diffuse_flakes;
     const std::string label;
@@ -63,25 +77,41 @@ public:
     /// must not take a new medium's entries for an old one's).
     const uint64_t id;
 
-    /// Remembers the frame of a collision at p (Mitsuba's float position of the event).
-    void remember(const float p[3], const mf_frame& frame) const {
-        RecentFrames& r = t_recent_frames;
-        RecentFrames::Entry& e = r.entries[r.next];
-        r.next = (r.next + 1) % RecentFrames::kSize;
+    /// The library field for the tracking calls (null for a stationary medium).
+    const mf_field* field_handle() const { return field.library ? field.library->handle() : nullptr; }
+    void* field_user_data() const { return field.library ? field.library->user_data() : nullptr; }
+
+    /// Remembers a collision at p (Mitsuba's float position of the event).
+    void remember(const float p[3], const mf_frame& frame, const mf_local_params& local) const {
+        RecentEvents& r = t_recent_events;
+        RecentEvents::Entry& e = r.entries[r.next];
+        r.next = (r.next + 1) % RecentEvents::kSize;
         e.state_id = id;
         e.p[0] = p[0];
         e.p[1] = p[1];
         e.p[2] = p[2];
         e.frame = frame;
+        e.local = local;
     }
 
-    /// The local frame at p (see the file comment).
-    mf_frame frame_at(const float p[3]) const {
-        for (const RecentFrames::Entry& e : t_recent_frames.entries)
-            if (e.state_id == id && e.p[0] == p[0] && e.p[1] == p[1] && e.p[2] == p[2]) return e.frame;
+    /// The local frame and parameters at p (see the file comment); false for an event whose local
+    /// parameters are unknown.
+    bool event_at(const float p[3], mf_frame* frame, mf_local_params* local) const {
+        for (const RecentEvents::Entry& e : t_recent_events.entries)
+            if (e.state_id == id && e.p[0] == p[0] && e.p[1] == p[1] && e.p[2] == p[2]) {
+                *frame = e.frame;
+                *local = e.local;
+                return true;
+            }
+        if (field.library) {
+            unprepared.fetch_add(1, std::memory_order_relaxed);
+            return false;
+        }
         frame_queries.fetch_add(1, std::memory_order_relaxed);
         const mf_surface_point s = surface->point(mf_vec3{p[0], p[1], p[2]});
-        return mf_frame{s.normal, s.tangent};
+        *frame = mf_frame{s.normal, s.tangent};
+        *local = mf_local_params{};
+        return true;
     }
 
     // Counters, relaxed atomics read by report(): tracked segments, collisions, the tracker's
@@ -104,6 +134,8 @@ public:
            << ", surface_queries = " << surface_queries.load() << ", tentative_collisions = " << tentative.load()
            << ", majorant_violations = " << violations.load() << ", frame_queries = " << frame_queries.load()
            << ", unprepared_calls = " << unprepared.load() << ", errors = " << errors.load();
+        if (field.fields)
+            for (const auto& f : field.fields->fields) os << ", field " << f->param() << " = " << f->element();
         return os.str();
     }
 

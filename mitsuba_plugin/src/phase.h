@@ -1,5 +1,6 @@
 // macrofacet for Mitsuba 3 — the flakes' phase function (seeds/000 Eq. 11–12, the flakes'
-// reflectance included) in the local frame of the mean surface at the event (medium_state.h).
+// reflectance included) in the local frame of the mean surface at the event, with the medium's
+// local parameters there when they vary in space (medium_state.h; mf_phase_*_local).
 //
 // It belongs to its medium: the medium creates it (a macrofacet medium takes no nested <phase>,
 // its flake parameters define the phase function). Mitsuba's plugin registry keys plugins by
@@ -53,7 +54,9 @@ public:
         }
         mf_phase_sample_result s;
         mf_frame frame;
-        if (!frame_at(mi, &frame) || !call(mf_phase_sample(state_->medium, &frame, wi(mi), u, &s)) || !s.valid || !(s.pdf > 0))
+        mf_local_params local;
+        if (!event_at(mi, &frame, &local) || !call(mf_phase_sample_local(state_->medium, &local, &frame, wi(mi), u, &s)) || !s.valid ||
+            !(s.pdf > 0))
             return {Vector3f(0.f), Spectrum(0.f), 0.f};
         return {Vector3f(float(s.wo.x), float(s.wo.y), float(s.wo.z)),
                 Spectrum(float(s.weight.r), float(s.weight.g), float(s.weight.b)), Float(s.pdf)};
@@ -64,7 +67,9 @@ public:
         if (!active) return {Spectrum(0.f), 0.f};
         mf_phase_value v;
         mf_frame frame;
-        if (!frame_at(mi, &frame) || !call(mf_phase_eval_pdf(state_->medium, &frame, wi(mi), unit(wo.x(), wo.y(), wo.z()), &v)))
+        mf_local_params local;
+        if (!event_at(mi, &frame, &local) ||
+            !call(mf_phase_eval_pdf_local(state_->medium, &local, &frame, wi(mi), unit(wo.x(), wo.y(), wo.z()), &v)))
             return {Spectrum(0.f), 0.f};
         return {Spectrum(float(v.value.r), float(v.value.g), float(v.value.b)), Float(v.pdf)};
     }
@@ -76,11 +81,11 @@ public:
 private:
     static mf_vec3 wi(const MediumInteraction3f& mi) { return unit(mi.wi.x(), mi.wi.y(), mi.wi.z()); }
 
-    bool frame_at(const MediumInteraction3f& mi, mf_frame* frame) const {
+    /// The event's frame and local parameters (medium_state.h); false when they are unknown.
+    bool event_at(const MediumInteraction3f& mi, mf_frame* frame, mf_local_params* local) const {
         const float p[3] = {mi.p.x(), mi.p.y(), mi.p.z()};
         try {
-            *frame = state_->frame_at(p);
-            return true;
+            return state_->event_at(p, frame, local);
         } catch (const std::exception&) {
             return call(MF_ERROR_INVALID_ARGUMENT);
         }

@@ -43,13 +43,60 @@ CASES = [
     ("spectrum list", medium(SIGMA + ALPHA + '<spectrum name="eta" value="400:1, 500:2"/>'), ['parameter "eta"', "wavelength"]),
     ("no mean surface", medium(SIGMA + ALPHA, ""), ['mean_surface']),
     ("mean surface misnamed", medium(SIGMA + ALPHA, '<shape type="sphere" name="surface"/>'), ['"surface"', "mean_surface"]),
-    ("mean surface a disk", medium(SIGMA + ALPHA, '<shape type="disk" name="mean_surface"/>'), ["mean_surface", "sphere or a closed triangle mesh"]),
+    ("mean surface a disk", medium(SIGMA + ALPHA, '<shape type="disk" name="mean_surface"/>'), ["mean_surface", "a sphere, a closed triangle mesh"]),
     ("mean surface a rectangle", medium(SIGMA + ALPHA, '<shape type="rectangle" name="mean_surface"/>'), ["mean_surface", "closed triangle mesh"]),
     ("mean surface flipped mesh", medium(SIGMA + ALPHA, f'<shape type="obj" name="mean_surface"><string name="filename" value="{TORUS}"/>'
                                                         '<boolean name="flip_normals" value="true"/></shape>'), ["mean_surface", "flip_normals"]),
     ("nested phase", medium(SIGMA + ALPHA + '<phase type="hg"/>'), ["<phase>"]),
     ("Mitsuba's sample_emitters", medium(SIGMA + ALPHA + '<boolean name="sample_emitters" value="false"/>'), ['"sample_emitters"']),
 ]
+
+
+def grid(name, filename, to_world="", extra=""):
+    """A gridvolume for parameter `name` over `filename`."""
+    return (f'<volume name="{name}" type="gridvolume"><string name="filename" value="{filename}"/>{extra}'
+            f'<transform name="to_world">{to_world}</transform></volume>')
+
+
+# a box that covers the unit sphere's medium at sigma <= 0.03 (region [-1.1, 1.1]^3)
+COVERING = '<scale value="3"/><translate x="-1.5" y="-1.5" z="-1.5"/>'
+
+
+def varying_cases(mi, tmp):
+    """Bad spatially varying parameters (issue 12): each refused at load, naming the parameter and
+    what is wrong with it."""
+    import field_data
+
+    def vol(name, values, n=(2, 2, 2), channels=1):
+        path = os.path.join(tmp, name)
+        field_data.write_volume(mi, path, values, n, channels)
+        return path
+
+    ok = vol("alpha_ok.vol", [0.2, 0.3] * 4)
+    negative = vol("alpha_negative.vol", [0.2, 0.3, 0.2, -0.1, 0.2, 0.3, 0.2, 0.3])
+    nan = vol("sigma_nan.vol", [0.01] * 5 + [float("nan")] + [0.01] * 2)
+    not_pd = vol("aniso_not_pd.vol", [1e-3, 1e-3, 1e-3, 2e-3, 0, 0] * 8, channels=6)
+    texture_no_uv = os.path.join(tmp, "tint.exr")
+    mi.Bitmap(mi.TensorXf([0.5] * 12, (2, 2, 3))).write(texture_no_uv)
+    sdf = vol("sphere_sdf.vol", field_data.sphere_sdf(9, 1.5), (9, 9, 9))
+    sdf_mean = (f'<shape type="sdfgrid" name="mean_surface"><string name="filename" value="{sdf}"/>'
+                '<transform name="to_world"><scale value="3"/><translate x="-1.5" y="-1.5" z="-1.5"/></transform></shape>')
+    return [
+        ("grid not covering the medium", medium(SIGMA + grid("alpha", ok)),
+         ['parameter "alpha"', "does not cover the medium's region", "wrap_mode repeat"]),
+        ("negative voxel", medium(SIGMA + grid("alpha", negative, COVERING)), ['parameter "alpha"', "voxel (1, 1, 0)", "-0.1", "> 0"]),
+        ("NaN voxel", medium(ALPHA + grid("sigma", nan, COVERING)), ['parameter "sigma"', "voxel (1, 0, 1)", "nan"]),
+        ("anisotropy not positive definite", medium(SIGMA + grid("anisotropy", not_pd, COVERING)),
+         ['"anisotropy"', "not positive definite", "voxel (0, 0, 0)"]),
+        ("anisotropy as a texture", medium(SIGMA + f'<texture name="anisotropy" type="bitmap"><string name="filename" value="{texture_no_uv}"/></texture>'),
+         ['"anisotropy"', "not a texture"]),
+        ("texture without uv", medium(SIGMA + f'<texture name="alpha" type="bitmap"><string name="filename" value="{texture_no_uv}"/></texture>', sdf_mean),
+         ['parameter "alpha"', "no texture coordinates", "sdfgrid"]),
+        ("parameter that cannot vary", medium(SIGMA + ALPHA + grid("eta", ok, COVERING)), ['"eta"', "cannot vary in space"]),
+        ("alpha as a 6-channel grid", medium(SIGMA + grid("alpha", not_pd, COVERING)), ['parameter "alpha"', "6 channels", "1 channel"]),
+        ("sdfgrid smaller than the medium", medium('<float name="sigma" value="0.2"/>' + ALPHA, sdf_mean),
+         ["sdfgrid", "reaches the grid's boundary", "enlarge it"]),
+    ]
 
 
 def main():
@@ -74,6 +121,7 @@ def main():
             f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
         cases = CASES + [("open mesh", medium(SIGMA + ALPHA, f'<shape type="obj" name="mean_surface"><string name="filename" value="{tri}"/></shape>'),
                           ["mean_surface", "not closed"])]
+        cases += varying_cases(mi, tmp)
         for what, xml, fragments in cases:
             expect_error(what, lambda xml=xml: mi.load_string(xml), fragments)
 

@@ -1,0 +1,46 @@
+//! # macrofacet
+//!
+//! Gaussian-process statistical surfaces (GPSS) rendered as classic exponential participating
+//! media — the *macrofacet theory* of Huang, Cui, Wang and Yan (seeds/000). A surface whose
+//! heights are a Gaussian process becomes a shell of flakes around its mean surface, with
+//! extinction `σ_t(f, d) = ρ(f) σ(d)` (Eq. 14/31) and a conductor phase function (Eq. 11–12)
+//! built from a full-sphere NDF (Eq. 38). Nothing here realizes a Gaussian process.
+//!
+//! Pure maths: no I/O, no global state, no random number generator of its own (callers pass
+//! uniform numbers). All arithmetic is `f64`.
+//!
+//! ## Conventions (stated once, followed everywhere)
+//! - **Local frame**: the geometric normal (gradient of the mean signed distance) is `+z`; the
+//!   tangent is `+x` and carries `alpha_u` ([`frame::Frame`]).
+//! - **Directions**: phase functions and NDF samplers take `wi`, `wo` pointing *away* from the
+//!   event (Mitsuba 3 / pbrt); a ray travelling along `d` has `wi = -d`. Free-flight routines
+//!   take the propagation direction `d`.
+//! - **SDF sign**: `f > 0` outside / above the mean surface, `f < 0` inside.
+//! - **Units**: `sigma` in scene units, roughness unitless, `alpha_i = √2 σ / l_i` (Eq. 4).
+//! - **Spectrum**: RGB triplets ([`Rgb`]).
+
+// `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod error;
+pub mod field;
+pub mod frame;
+pub mod fresnel;
+pub mod height;
+pub mod limits;
+pub mod medium;
+pub mod ndf;
+pub mod params;
+pub mod phase;
+pub mod rng;
+pub mod special;
+pub mod surface;
+pub mod tracking;
+
+/// Linear RGB, one value per channel.
+pub type Rgb = [f64; 3];
+
+pub use error::{Error, ErrorKind, Result};
+pub use medium::{FreeFlight, MacrofacetMedium};
+pub use params::{medium_from_params, ParamSet, ParamValue};
+pub use phase::{MacrofacetPhase, MicroBsdf, PhaseSample, VndfSampling, PHASE_SAMPLE_DIMENSIONS};

@@ -4,7 +4,7 @@
 #   (a) a converged reference of each method (REF_SPP, seed 1),
 #   (b) equal-spp renders (SPP, seed 2) of both,
 #   (c) an equal-time macrofacet render (its spp scaled to the gpis render's wall time, seed 3),
-# and writes validation/renders.json (+ renders.tsv, the form examples/validate.rs reads) (schema read by examples/validate.rs) with wall times, spp,
+# and writes validation/renders.json (+ renders.tsv, the form crates/macrofacet-validation/examples/validate.rs reads) (schema read by crates/macrofacet-validation/examples/validate.rs) with wall times, spp,
 # the MSE of each render against its own reference and against the GPIS reference (the ground
 # truth: for the macrofacet renders that is the model difference plus noise), and PNG paths.
 # Usage: scripts/compare_gpis.sh [REF_SPP [SPP]]   (defaults 512, 64; ~2 min on 2 idle cores,
@@ -79,7 +79,7 @@ json=validation/renders.json
 } > "$json.tmp"
 mv "$json.tmp" "$json"
 
-# The same numbers in the tab-separated form examples/validate.rs (section 5) reads from the
+# The same numbers in the tab-separated form crates/macrofacet-validation/examples/validate.rs (section 5) reads from the
 # validation directory: mse against the GPIS reference (the ground truth), image relative to it.
 tsv=validation/renders.tsv
 {

@@ -68,6 +68,44 @@ pub enum mf_status {
     MF_ERROR_INTERNAL = 7199,
 }
 
+/// Generates, from one list of `variant => message`, the table [`mf_status::ALL`], the message of
+/// each status and the lookup of a C integer. The values are written once, in the enum above
+/// (cbindgen reads the enum as written: it does not expand macros); the `match` generated here is
+/// exhaustive, so a status added to the enum without a message does not compile.
+macro_rules! status_messages {
+    ($($variant:ident => $message:literal,)*) => {
+        impl mf_status {
+            /// Every status, in the order of the enum.
+            pub const ALL: &'static [mf_status] = &[$(mf_status::$variant),*];
+
+            /// The NUL-terminated description of this status (what [`mf_status_str`] returns).
+            pub fn message(self) -> &'static str {
+                match self {
+                    $(mf_status::$variant => concat!($message, "\0"),)*
+                }
+            }
+
+            /// The status whose value is `code`, if any.
+            pub fn from_code(code: i32) -> Option<mf_status> {
+                Self::ALL.iter().copied().find(|status| *status as i32 == code)
+            }
+        }
+    };
+}
+
+status_messages! {
+    MF_OK => "success",
+    MF_ERROR_NULL_POINTER => "a required pointer argument was NULL",
+    MF_ERROR_INVALID_ARGUMENT => "invalid argument (NaN, infinite, not unit length or out of range)",
+    MF_ERROR_UNKNOWN_PARAMETER => "unknown parameter name",
+    MF_ERROR_WRONG_TYPE => "parameter has the wrong type",
+    MF_ERROR_MISSING_PARAMETER => "missing or conflicting parameters",
+    MF_ERROR_INVALID_VALUE => "parameter value out of range",
+    MF_ERROR_INVALID_UTF8 => "string is not valid UTF-8",
+    MF_ERROR_CALLBACK => "a host callback reported a failure",
+    MF_ERROR_INTERNAL => "internal error",
+}
+
 impl From<ErrorKind> for mf_status {
     fn from(kind: ErrorKind) -> Self {
         match kind {
@@ -176,20 +214,7 @@ pub extern "C" fn mf_version() -> *const c_char {
 /// value of a Rust enum would be undefined behaviour.
 #[no_mangle]
 pub extern "C" fn mf_status_str(status: i32) -> *const c_char {
-    let text: &'static str = match status {
-        0 => "success\0",
-        7101 => "a required pointer argument was NULL\0",
-        7102 => "invalid argument (NaN, infinite, not unit length or out of range)\0",
-        7103 => "unknown parameter name\0",
-        7104 => "parameter has the wrong type\0",
-        7105 => "missing or conflicting parameters\0",
-        7106 => "parameter value out of range\0",
-        7107 => "string is not valid UTF-8\0",
-        7108 => "a host callback reported a failure\0",
-        7199 => "internal error\0",
-        _ => "unknown status\0",
-    };
-    text.as_ptr().cast()
+    mf_status::from_code(status).map_or("unknown status\0", mf_status::message).as_ptr().cast()
 }
 
 /// Copies the message of the last failing call on this thread into `buf` (NUL-terminated,
@@ -224,4 +249,27 @@ pub unsafe extern "C" fn mf_last_error_message(buf: *mut c_char, len: usize, out
         })
     });
     result.unwrap_or(mf_status::MF_ERROR_INTERNAL)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every status of the table maps back from its value and has its own description;
+    /// values outside the table are "unknown status".
+    #[test]
+    fn status_table_round_trips() {
+        let message = |code: i32| unsafe { CStr::from_ptr(mf_status_str(code)) }.to_str().unwrap();
+        for (i, status) in mf_status::ALL.iter().enumerate() {
+            assert_eq!(mf_status::from_code(*status as i32), Some(*status));
+            assert!(status.message().ends_with('\0'));
+            assert_ne!(message(*status as i32), "unknown status");
+            for other in &mf_status::ALL[..i] {
+                assert_ne!(message(*status as i32), message(*other as i32), "{status:?} and {other:?}");
+            }
+        }
+        for code in [-1, 1, 7100, 7109, 7198, 7200, i32::MIN, i32::MAX] {
+            assert_eq!(message(code), "unknown status");
+        }
+    }
 }

@@ -19,7 +19,7 @@
 //! ## Typical use
 //! ```
 //! use glam::DVec3;
-//! use macrofacet::stats::{sidak_alpha, Pcg32, SphereChi2};
+//! use macrofacet_validation::stats::{sidak_alpha, Pcg32, SphereChi2};
 //! use std::f64::consts::PI;
 //!
 //! // Level of each test when a file runs 4 of them at a family-wise level of 1%.

@@ -39,6 +39,8 @@ foreach(artifact f IN ZIP_LISTS artifacts outputs)
   if(NOT EXISTS "${artifact}")
     message(FATAL_ERROR "cargo succeeded but did not produce ${artifact}")
   endif()
+  get_filename_component(dir "${f}" DIRECTORY)
+  file(MAKE_DIRECTORY "${dir}")
   file(COPY_FILE "${artifact}" "${f}" ONLY_IF_DIFFERENT)
   # cargo leaves an up-to-date library untouched; mark it current so that the build does not
   # re-run this step every time (the inputs may be newer after a no-op edit).

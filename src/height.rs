@@ -20,7 +20,7 @@ pub const DEFAULT_SHELL_EXTENT: f64 = 3.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeightProfile {
-    /// Standard deviation of the heights (scene units), Eq. 5.
+    /// Standard deviation of the heights (scene units), seeds/000 Eq. 5.
     pub sigma: f64,
     /// `k`: the shell's top face is at `f = k σ`.
     pub shell_extent: f64,
@@ -38,7 +38,7 @@ impl HeightProfile {
         self.shell_extent * self.sigma
     }
 
-    /// `ρ(f) = φ(f;0,σ²) / Φ(f;0,σ²)` (Eq. 13), zero above the top face.
+    /// `ρ(f) = φ(f;0,σ²) / Φ(f;0,σ²)` (seeds/000 Eq. 13), zero above the top face.
     pub fn density(&self, f: f64) -> f64 {
         if f > self.top() {
             0.0

@@ -14,14 +14,14 @@
 //! | `alpha` | float | isotropic roughness; for `gpss` also `alpha_z` (an isotropic kernel) |
 //! | `alpha_u`, `alpha_v` | float | anisotropic roughness along the tangent / bitangent |
 //! | `alpha_z` | float | `gpss` only: roughness along the normal, `0` = height field |
-//! | `lengthscale`, `lengthscale_x/_y/_z` | float | kernel form: `alpha_i = √2 σ / l_i` (Eq. 4) |
+//! | `lengthscale`, `lengthscale_x/_y/_z` | float | kernel form: `alpha_i = √2 σ / l_i` (seeds/000 Eq. 4) |
 //! | `micro_bsdf` | string | `conductor` or `diffuse` (`conductor`) |
 //! | `material` | string | conductor preset (`Au`, `Ag`, `Cu`, `Al`, `Cr`) or `none` = mirror (`none`) |
 //! | `eta`, `k` | rgb | conductor index, instead of `material` |
 //! | `specular_reflectance` | rgb | scale of the conductor reflectance, in [0, 1] (1) |
 //! | `reflectance` | rgb | diffuse flake albedo, in [0, 1] (0.5) |
-//! | `vndf_sampling` | string | `exact` or `mixture` (conductor flakes: Eq. 40 for `gpss`, seeds/001 App. B for height fields) (`exact`) |
-//! | `mixture_ratio` | float | R of the mixture, in (0, 1) (0.5 for Eq. 40; `1 − α/2` within [0.5, 0.95] for App. B) |
+//! | `vndf_sampling` | string | `exact` or `mixture` (conductor flakes: seeds/000 Eq. 40 for `gpss`, seeds/001 App. B for height fields) (`exact`) |
+//! | `mixture_ratio` | float | R of the mixture, in (0, 1) (0.5 for seeds/000 Eq. 40; `1 − α/2` within [0.5, 0.95] for App. B) |
 
 use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
@@ -361,8 +361,8 @@ fn read_ndf(r: &Reader, sigma: Option<f64>, default: &str) -> Result<(Ndf, f64)>
     Ok((Ndf::Ltmd(Ltmd::new(base, matrix)?), alpha_mean))
 }
 
-/// The microsurface transform: `stretch` (Eq. 31) or the four `transform_*` entries of `M`
-/// (Eq. 9), or none.
+/// The microsurface transform: `stretch` (seeds/001 Eq. 31) or the four `transform_*` entries of `M`
+/// (seeds/001 Eq. 9), or none.
 fn read_transform(r: &Reader) -> Result<Option<glam::DMat2>> {
     const NAMES: [&str; 4] = ["transform_xx", "transform_xy", "transform_yx", "transform_yy"];
     let stretch = r.float("stretch")?;
@@ -407,7 +407,7 @@ fn read_roughness(r: &Reader, sigma: f64, with_z: bool) -> Result<[f64; 3]> {
             "\"alpha_z\" / \"lengthscale_z\" apply to distribution \"gpss\" only"));
     }
     let names = if uses_kernel { kernel_names } else { alpha_names };
-    // Kernel form: alpha_i = √2 σ / l_i (Eq. 4); roughness form: as given.
+    // Kernel form: alpha_i = √2 σ / l_i (seeds/000 Eq. 4); roughness form: as given.
     // Checked here so that the message names the parameter as given (alpha_z may be 0).
     let to_alpha = |name: &str, v: f64| -> Result<f64> {
         if uses_kernel {

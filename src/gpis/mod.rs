@@ -25,9 +25,9 @@
 //!    `Φ(−6) ≈ 1e-9`) the ray is advanced by sphere tracing on `μ` without sampling (Fig. 8's
 //!    conservative envelope); a ray outside the envelope that moves away from the mean surface
 //!    (`d · ∇μ ≥ 0`) has escaped. Exact for convex means (plane, sphere).
-//! 2. **Sampling the 1-D process** (Eq. 14, step (1) of Sec. 4.2): values at `t_j = t_0 + jΔt`
+//! 2. **Sampling the 1-D process** (seeds/004 Eq. 14, step (1) of Sec. 4.2): values at `t_j = t_0 + jΔt`
 //!    are drawn one at a time from the Gaussian conditioned on the memory at the origin and on
-//!    the previous samples of the segment (Eq. 3 of seeds/000, seeds/004 Sec. 3.1.3–3.1.4).
+//!    the previous samples of the segment (seeds/000 Eq. 3, seeds/004 Sec. 3.1.3–3.1.4).
 //!    `Δt` solves `k(x, x + Δt d)/k(x, x) = ρ` with `ρ =` [`STEP_CORRELATION`] `= 0.95`, capped
 //!    at [`MarchSettings::max_step`]` · σ` (a vertical ray in a height field is perfectly
 //!    correlated and would otherwise take one infinite step).
@@ -50,7 +50,7 @@
 //!    linear interpolation. Crossings that dip below zero *between* two positive samples are
 //!    missed; with `ρ = 0.95` that is rare (the tests bound its effect on the transmittance
 //!    through the comparison with `ρ = 0.99`).
-//! 5. **Normal** (step (3) of Sec. 4.2, Eq. 6): the gradient at the crossing `x_c` is drawn
+//! 5. **Normal** (step (3) of Sec. 4.2, seeds/004 Eq. 6): the gradient at the crossing `x_c` is drawn
 //!    from its Gaussian law conditioned on the memory, the window, the bisection samples and
 //!    `f(x_c) = 0`, with the directional derivative `d · ∇f` truncated to negative values (an
 //!    entering crossing, `f` goes from `+` to `−`). The normal `∇f/|∇f|` then faces the incoming
@@ -99,7 +99,7 @@
 //! ## With fields (`tests/gpis_fields.rs`)
 //! - Gram matrices of values and gradients on random point sets (smooth anisotropy, smooth
 //!   roughness, stepped σ and α, height fields) have no eigenvalue below −3e-17 × the largest;
-//!   the kernel without Eq. 25's prefactor gives −6e-2. Derivative covariances match finite
+//!   the kernel without seeds/004 Eq. 25's prefactor gives −6e-2. Derivative covariances match finite
 //!   differences of the kernel to 5e-8. Realizations' covariance across a step and a ramp
 //!   matches the kernel within 2.4 SE (300 pairs).
 //! - A field of the medium's own (or of constant) parameters gives the stationary crossings bit
@@ -107,7 +107,7 @@
 //! - Planar GPSS, σ 0.5 | 1 across `x = 0` at fixed `α = 1`, 45°: per region and across a ramp
 //!   11 lengthscales wide, realizations vs the macrofacet tracker with the same field differ as
 //!   in the stationary case (≤ 0.015 down to the mean plane). Across a sharp step the
-//!   realizations jump (Eq. 25's `σ(x)σ(y)`): going up the step their transmittance falls 0.16
+//!   realizations jump (seeds/004 Eq. 25's `σ(x)σ(y)`): going up the step their transmittance falls 0.16
 //!   below the tracker's just past it (z ≈ −45), going down it rises up to 0.045 above (z ≈ +11)
 //!   — cliffs that the local-stationary medium `ρ(f; σ(x))` does not represent.
 

@@ -42,7 +42,7 @@ impl MicrofacetDistribution for Beckmann {
         (-e - 4.0 * m.z.ln()).exp() / (PI * self.alpha_u * self.alpha_v)
     }
 
-    /// Eq. 32 with `alpha_z = 0`: the Beckmann projected area `(1 + Λ(w)) cos θ_w`.
+    /// seeds/000 Eq. 32 with `alpha_z = 0`: the Beckmann projected area `(1 + Λ(w)) cos θ_w`.
     fn projected_area(&self, w: DVec3) -> f64 {
         self.gradient().projected_area(w)
     }

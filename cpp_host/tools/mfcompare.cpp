@@ -6,7 +6,8 @@
 //   mfcompare maxreldiff A.exr B.exr -> max |a-b| / max(|a|, |b|) over all values (0 where both are 0)
 //   mfcompare average OUT.exr A.exr B.exr...
 //       writes the value-wise mean of independent renders of one image at equal spp (with a box
-//       filter: a render with all their samples)
+//       filter: a render with all their samples), and its 8-bit sRGB PNG preview beside it
+//       (OUT with .png for .exr), as mfrender does
 //   mfcompare patches NX NY A.exr B.exr
 //       per patch of an NX x NY partition of the image (patch (r, c): rows [r H/NY, (r+1) H/NY),
 //       columns [c W/NX, (c+1) W/NX); lines in row-major order, top row first, after a header):
@@ -29,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "image_io.h"
 
 namespace {
@@ -138,7 +140,7 @@ int main(int argc, char** argv) {
                 for (size_t i = 0; i < acc.size(); ++i) acc[i] += next.rgb[i];
             }
             for (size_t i = 0; i < acc.size(); ++i) sum.rgb[i] = float(acc[i] / double(argc - 3));
-            mf::write_exr(argv[2], sum);
+            mf::write_image_outputs(argv[2], sum);
             return 0;
         }
         if (mode == "patches") {

@@ -359,7 +359,7 @@ fn repr_c_layouts_match_the_c_test() {
 /// `f = z - 0.25`: a plane for the GPIS trace, counting its calls through `user_data`.
 unsafe extern "C" fn plane_sdf(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_sdf_sample) {
     *(user_data as *mut usize) += 1;
-    *out = mf_sdf_sample { f: p.z - 0.25, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
+    *out = mf_sdf_sample { f: p.z - 0.25, gradient: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, u: 0.0, v: 0.0 };
 }
 
 #[test]

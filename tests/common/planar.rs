@@ -13,7 +13,7 @@ pub struct PlaneSurface;
 impl MeanSurface for PlaneSurface {
     type Cache = ();
     fn point(&self, p: DVec3) -> Result<SurfacePoint> {
-        Ok(SurfacePoint { f: p.z, normal: DVec3::Z, tangent: DVec3::X })
+        Ok(SurfacePoint { f: p.z, normal: DVec3::Z, tangent: DVec3::X, uv: glam::DVec2::new(p.x, p.y) })
     }
     /// Exact: `f` is linear along any segment and `d · n = d_z`.
     fn bound(&self, start: &SurfacePoint, _p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {

@@ -33,7 +33,7 @@
 #
 # Usage: scripts/compare_gpis.sh [SCENE] [REF_SPP [SPP]]
 #   defaults bench/gpis_compare.xml, 512, 64 (an old-style first argument that is a number is
-#   REF_SPP). Measured on 2 cores shared with other jobs: gpis_compare ~5 min (load 6-7);
+#   REF_SPP). Measured on 2 shared cores: gpis_compare (defaults) 1.2 CPU minutes, 37 s wall;
 #   `scripts/compare_gpis.sh bench/gpis_varying.xml 256 32` (64x64, the command of the report)
 #   4.8 CPU minutes, 6 min wall at load 3, ~2.5 min on idle cores (the gpis reference is 70 %).
 # Env: BUILD_DIR (default build/compare), THREADS (default: nproc), RES (default: the scene's own

@@ -122,3 +122,16 @@ fn fuzz_majorant_bounds_sigma_t_at_both_ends() {
     let majorant = medium.majorant(f_a, f_b, d);
     assert!(majorant >= medium.sigma_t(f_a, d) && majorant >= medium.sigma_t(f_b, d), "{majorant}");
 }
+
+/// Found by fuzzing (`fuzz/`, target `medium_queries`): one ulp below a top face at 39.8σ
+/// (σ = 1e50), rising at `d_z = 1e-300` to `t = +inf`, the nearly parallel rule formed
+/// `∞ · 0` (the density underflows there): τ = NaN.
+#[test]
+fn fuzz_infinite_segment_where_the_density_underflows_is_not_nan() {
+    let medium = medium(&[("sigma", 1e50), ("shell_extent", 3.9810717055349734e1), ("alpha", 1e6)], "ggx");
+    let d = DVec3::new(0.0, 1.0, 1e-300);
+    let f = 3.981071705534973e51;
+    assert_eq!(medium.optical_depth(f, d, f64::INFINITY), 0.0);
+    assert_eq!(medium.transmittance(f, d, f64::INFINITY), 1.0);
+    assert_eq!(medium.sample_free_flight(f, d, f64::INFINITY, 0.999), FreeFlight::Pass);
+}

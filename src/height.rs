@@ -103,8 +103,17 @@ impl HeightProfile {
         }
         let (fa, fb) = (f0.min(top), f1.min(top));
         if (fb - fa).abs() <= SMALL_DELTA * self.sigma {
-            // Nearly parallel: the length below the top face times the mean density there.
-            let inside = if above0 || above1 { ((fb - fa) / slope).abs().min(t) } else { t };
+            // Nearly parallel: the length below the top face times the mean density there. The
+            // length comes from where the line meets the face, not from `f1`: `f0 + t·slope`
+            // may round onto the face while the segment leaves it (found by fuzzing: a shorter
+            // segment transmitted less than a longer one).
+            let inside = if slope > 0.0 {
+                t.min((top - f0) / slope)
+            } else if above0 {
+                (t - (f0 - top) / -slope).max(0.0)
+            } else {
+                t
+            };
             let (mid, half) = (0.5 * (fa + fb), 0.5 * (fb - fa));
             let node = half * (0.6f64).sqrt();
             let mean = (5.0 * self.density(mid - node) + 8.0 * self.density(mid) + 5.0 * self.density(mid + node)) / 18.0;

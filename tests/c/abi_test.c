@@ -1460,6 +1460,10 @@ static void test_surfaces_and_tracking(void) {
   double max_x = -1e300;
   for (size_t i = 0; i < em.vertex_count; ++i) max_x = em.positions[3 * i] > max_x ? em.positions[3 * i] : max_x;
   CHECK(max_x >= 2 + top, "the enclosure must reach beyond the shell (%g)", max_x);
+  mf_mesh em_keep = em;
+  EXPECT_STATUS(mf_enclosure_mesh(NULL, &em_keep), MF_ERROR_NULL_POINTER, "enclosure");
+  EXPECT_STATUS(mf_enclosure_mesh(e, NULL), MF_ERROR_NULL_POINTER, "out_mesh");
+  CHECK(same_bits(&em_keep, &em, sizeof em), "mf_enclosure_mesh wrote its out-parameter on failure");
   mf_enclosure_free(e);
   mf_enclosure_free(NULL);
   EXPECT_STATUS(mf_surface_enclosure(sphere, NULL, NAN, 0.0, &e), MF_ERROR_INVALID_ARGUMENT, "level");

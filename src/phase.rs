@@ -1,9 +1,9 @@
 //! The macrofacet phase function, seeds/000 Eq. 11–12, with a choice of micro-BSDF on the
 //! flakes.
 //!
-//! Direction convention (Mitsuba 3 / pbrt): `wi` and `wo` both point *away* from the scattering
-//! point. A ray travelling along `d` that scatters has `wi = -d`; the sampled `wo` is the new
-//! propagation direction. All vectors are in the local frame (normal = `+z`).
+//! Direction convention (Mitsuba 3's names): `wi` and `wo` both point *away* from the scattering
+//! point. A ray travelling along `d` that scatters has `wi = -d` (pbrt-v4 calls this vector `wo`);
+//! the sampled `wo` is the new propagation direction. All vectors are in the local frame (normal = `+z`).
 //!
 //! The flakes are one-sided (seeds/002 §4.1): `p(wi, wo) = F(wi·m) D_wi(m) / (4 |wi·m|)` with
 //! the half vector `m = (wi + wo)/|wi + wo|` and the visible normals `D_wi` of seeds/000 Eq. 12, so

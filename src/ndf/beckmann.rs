@@ -15,7 +15,8 @@ pub struct Beckmann {
 }
 
 impl Beckmann {
-    /// `alpha_u` along the local tangent `x`, `alpha_v` along `y`; both within
+    /// `alpha_u` along the local tangent `x`, `alpha_v` along `y` (the `alpha_x`, `alpha_y` of
+    /// [`super::Gpss`], which follows the paper's kernel axes); both within
     /// [`crate::limits::ROUGHNESS_RANGE`].
     pub fn new(alpha_u: f64, alpha_v: f64) -> Result<Beckmann> {
         Ok(Beckmann { alpha_u: check_roughness("parameter \"alpha_u\"", alpha_u)?, alpha_v: check_roughness("parameter \"alpha_v\"", alpha_v)? })

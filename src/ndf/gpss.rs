@@ -2,6 +2,10 @@
 //! squared-exponential kernel has finite correlation length along the normal as well,
 //! `alpha_i = sqrt(2) sigma / l_i` (seeds/000 Eq. 4). Normals point in every direction; `alpha_z -> 0`
 //! recovers Beckmann.
+//!
+//! Naming: the fields follow the paper's kernel axes (`α_x, α_y, α_z` for `l_x, l_y, l_z`). The
+//! in-plane pair is what [`Beckmann`] and the parameter table call `alpha_u`, `alpha_v` (along the
+//! local tangent `x` and bitangent `y`): `alpha_x` = `alpha_u`, `alpha_y` = `alpha_v`.
 
 use super::beckmann::Beckmann;
 use super::gaussian_gradient::GaussianGradient;
@@ -14,7 +18,9 @@ use std::f64::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gpss {
+    /// Roughness along the local tangent `x`: the parameter `alpha_u`.
     pub alpha_x: f64,
+    /// Roughness along the local bitangent `y`: the parameter `alpha_v`.
     pub alpha_y: f64,
     /// `0` is allowed and means a height field: the NDF is then exactly Beckmann.
     pub alpha_z: f64,
@@ -25,8 +31,8 @@ impl Gpss {
     /// `[ALPHA_Z_MIN, ROUGHNESS_RANGE.1]`.
     pub fn new(alpha_x: f64, alpha_y: f64, alpha_z: f64) -> Result<Gpss> {
         Ok(Gpss {
-            alpha_x: check_roughness("parameter \"alpha_u\"", alpha_x)?,
-            alpha_y: check_roughness("parameter \"alpha_v\"", alpha_y)?,
+            alpha_x: check_roughness("alpha_x (parameter \"alpha_u\")", alpha_x)?,
+            alpha_y: check_roughness("alpha_y (parameter \"alpha_v\")", alpha_y)?,
             alpha_z: check_alpha_z("parameter \"alpha_z\"", alpha_z)?,
         })
     }

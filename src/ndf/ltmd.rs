@@ -11,7 +11,7 @@
 //!   `w`, then `m = M^{−T} u/|·|`. Exact whenever the base sampler is; the same holds for
 //!   `D(m)(m·n)` (seeds/001 Eqs. 25–26).
 //!
-//! `M = diag(α/α_x, α/α_y)` turns an isotropic shape-invariant base of roughness `α` into the
+//! `M = diag(α/α_u, α/α_v)` turns an isotropic shape-invariant base of roughness `α` into the
 //! classic anisotropic one (seeds/001 Eq. 29); [`Ltmd::stretch`] is the area-preserving `M_s` of seeds/001 Eq. 31.
 //! `M` is a plain value: a per-query matrix (e.g. from a tension map, §5.1) is just another
 //! `Ltmd`.

@@ -5,7 +5,8 @@
 //! - `D(m)` is defined for every unit `m` on the sphere; height-field NDFs (Beckmann, GGX) vanish
 //!   for `m.z <= 0`, the generalized macrofacet does not (seeds/000, Sec. 4.2.2).
 //! - `wi` points *away* from the surface, toward where light arrives from / the viewer
-//!   (Mitsuba 3 / pbrt). A ray propagating along `d` sees the flakes from `wi = -d`.
+//!   (Mitsuba 3's `wi`; pbrt-v4 names it `wo`). A ray propagating along `d` sees the flakes from
+//!   `wi = -d`.
 //! - `projected_area(w) = ∫ <w, m> D(m) dm` with `<a, b> = max(0, a·b)`. With the propagation
 //!   direction `d`, the paper's projected area is `sigma(d) = projected_area(-d) = Lambda(d) cos θ_d`
 //!   (seeds/000 Eq. 8 / 31).

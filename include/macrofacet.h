@@ -428,7 +428,7 @@ typedef struct mf_ndf_sample {
   struct mf_vec3 m;
   /**
    * Its density per solid angle, `D_wi(m) = <wi, m> D(m) / ((1 + Λ(wi)) cos θ_wi)` with the
-   * exact projected area of `D` (Eq. 27 of seeds/001).
+   * exact projected area of `D` (seeds/001 Eq. 27).
    */
   double pdf;
   bool valid;
@@ -769,7 +769,7 @@ void mf_medium_free(struct mf_medium *medium);
 enum mf_status mf_medium_shell_top(const struct mf_medium *medium, double *out_top);
 
 /**
- * Extinction `sigma_t(f, d)` (Eq. 14) at signed distance `f` for propagation direction `d`.
+ * Extinction `sigma_t(f, d)` (seeds/000 Eq. 14) at signed distance `f` for propagation direction `d`.
  *
  * # Safety
  * Pointers must be NULL or valid.
@@ -837,7 +837,7 @@ enum mf_status mf_medium_sample_free_flight(const struct mf_medium *medium,
                                             struct mf_free_flight *out_flight);
 
 /**
- * The phase function `p(wi, wo)` per channel (Eq. 11, flake reflectance included).
+ * The phase function `p(wi, wo)` per channel (seeds/000 Eq. 11, flake reflectance included).
  *
  * # Safety
  * Pointers must be NULL or valid.

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The one command that sets up a fresh Debian machine and runs every test:
-# the Rust tests (cargo), the header freshness check, and the CMake/ctest suite (C and C++ ABI
-# tests, sanitizers, the install/consumer test, the mfrender host tests).
+# the Rust tests (cargo), the header freshness check, the parameter-table check, and the
+# CMake/ctest suite (C and C++ ABI tests, sanitizers, the install/consumer test, the mfrender host
+# tests).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
@@ -13,6 +14,9 @@ cargo test --release --locked
 
 echo "== header freshness" >&2
 scripts/check_header.sh
+
+echo "== parameter table (README \"Medium parameters\" == the names the library reads)" >&2
+scripts/check_params_doc.sh
 
 echo "== cmake + ctest" >&2
 build_dir=build/test

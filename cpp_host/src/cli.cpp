@@ -104,7 +104,8 @@ void rename_or_throw(const std::string& from, const std::string& to) {
         throw Error("cannot rename \"" + from + "\" to \"" + to + "\": " + std::strerror(errno));
 }
 
-/// Write out.exr and its PNG preview under temporary names, renamed only when both succeeded.
+}  // namespace
+
 std::string write_image_outputs(const std::string& out_path, const Image& img) {
     std::string png_path = replace_ext(out_path, ".png");
     if (png_path == out_path) png_path = out_path + ".png";
@@ -123,6 +124,8 @@ std::string write_image_outputs(const std::string& out_path, const Image& img) {
     }
     return png_path;
 }
+
+namespace {
 
 int report_failure(const std::function<void()>& body) {
     try {

@@ -628,7 +628,7 @@ private:
             return;
         }
         if ((mf_bag[0] || mf_bag[1]) && !opts_.allow_macrofacet_placeholders) {
-            // The shape is the mean surface of a macrofacet (or gpis) medium (phase 2): the medium
+            // The shape is the mean surface of a macrofacet (or gpis) medium: the medium
             // fills f < top (k*sigma, resp. the gpis envelope), and the boundary f = top replaces
             // the shape in the BVH (make_region_boundary: one mechanism for both).
             const std::string kind = (mf_bag[0] ? mf_bag[0] : mf_bag[1])->type;
@@ -936,7 +936,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
   shapes      obj (flip_tex_coords), ply (ascii / binary_little_endian), serialized (shape_index;
               zlib), sphere (center, radius), rectangle, cube, disk, sdfgrid (filename .vol |
               .vdb with grid, normals; only as the mean surface of a macrofacet/gpis medium,
-              validated, not rendered yet); to_world, flip_normals,
+              validated; never rendered as a surface of its own); to_world, flip_normals,
               face_normals; nested or referenced bsdf, area emitter (nested, or a top-level
               <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
               uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)
@@ -950,13 +950,19 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               separable (default, Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o));
               from the library: gtr's gamma, lambda exact|dimov, and the microsurface transform
               stretch | transform_xx,_xy,_yx,_yy of any distribution (seeds/001)),
-              dielectric (int_ior, ext_ior: number or name), null, twosided (one or two bsdfs)
+              dielectric, thindielectric (int_ior, ext_ior: number or name; specular_reflectance,
+              specular_transmittance), roughdielectric (the same, both (tex), plus distribution,
+              alpha | alpha_u,alpha_v, sample_visible), plastic, roughplastic (int_ior, ext_ior,
+              diffuse_reflectance (tex), specular_reflectance ((tex) when rough), nonlinear;
+              rough: distribution, isotropic alpha, sample_visible), null, twosided (one or two
+              bsdfs)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
-              macrofacet (as the interior of its mean-surface shape; parameters as in the
-              C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
-              lengthscale*, gamma, lambda, stretch | transform_*, micro_bsdf, material |
-              eta,k, specular_reflectance, reflectance, vndf_sampling, mixture_ratio);
+              macrofacet (as the interior of its mean-surface shape; the library's parameter
+              names, whose types, ranges and defaults README.md "Medium parameters" lists:
+              sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z, lengthscale*,
+              gamma, lambda, stretch | transform_*, micro_bsdf, material | eta,k,
+              specular_reflectance, reflectance, vndf_sampling, mixture_ratio);
               sigma, variance, alpha*, lengthscale*, specular_reflectance, reflectance and
               the anisotropy may be a nested <volume> (constvolume: value; gridvolume:
               filename .vol | .vdb with grid, to_world, filter_type trilinear|nearest,
@@ -965,9 +971,9 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               surface as <shape name="mean_surface"> (sphere or mesh) and the shapes whose
               interior it is are boundaries (<bsdf type="null"/>, containing f < k sigma)
               gpis (realization-based ground truth; as the interior of its mean-surface
-              shape; the macrofacet names that apply: sigma | variance, shell_extent,
+              shape; of README.md "Medium parameters": sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,
-              specular_reflectance; plus memory renewal|renewal_plus, step_correlation)
+              specular_reflectance, memory renewal|renewal_plus, step_correlation)
   emitters    area (radiance), point (position | to_world, intensity), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)
@@ -978,9 +984,8 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               independent sampler (sample_count, seed)
   integrators volpath, path (max_depth, rr_depth, hide_emitters)
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
-Not supported (refused with the element's file:line): other plugins, e.g. plastic,
-roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
-normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media,
+Not supported (refused with the element's file:line): other plugins, e.g. principled,
+mask, blendbsdf, bumpmap, normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media,
 spectra from files or wavelength lists.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only

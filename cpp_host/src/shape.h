@@ -77,7 +77,8 @@ public:
     SourceLoc loc;
     std::shared_ptr<const Bsdf> bsdf;
     std::shared_ptr<const Medium> interior, exterior;
-    /// Parameter bags of macrofacet/gpis media referenced by this shape (phase 2 input).
+    /// Parameter bags of the macrofacet/gpis media referenced by this shape, which the scene builder
+    /// hands to the library (mf_params) when it builds the medium on this mean surface.
     std::shared_ptr<const MediumParamBag> interior_bag, exterior_bag;
     const Emitter* emitter = nullptr;  // area emitter attached to this shape (owned by the scene)
 };

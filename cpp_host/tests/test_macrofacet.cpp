@@ -1,4 +1,4 @@
-// Macrofacet medium (phase 2) tests: the library through the C ABI, the shell region, delta /
+// Macrofacet medium tests: the library through the C ABI, the shell region, delta /
 // ratio tracking on curved shells, the phase function with NEE + MIS, end to end.
 //
 //  * tracking_vs_analytic (planar): near the centre of a large cube's top face the SDF is exactly

@@ -194,7 +194,7 @@ TEST_CASE(macrofacet_parameter_bag) {
         CHECK(u.bag->get("correlated") && u.bag->get("correlated")->b);
         CHECK(u.bag->get("sigma")->loc.line == 6);  // body starts on line 5
     }
-    // Without placeholders the phase-2 hook hands the bag to the library; the first entry it
+    // Without placeholders the scene builder hands the bag to the library; the first entry it
     // cannot take is reported at its own line (a boolean here; test_macrofacet covers the rest).
     CHECK_THROWS_WITH(build(body), "mem.xml:7: <medium type=\"macrofacet\" id=\"mf\">: parameter \"correlated\" is a boolean");
     CHECK_THROWS_WITH(build("<medium type=\"macrofacet\" id=\"mf\">\n<float name=\"sigma\" value=\"0.01\"/>\n<float name=\"alpha\" value=\"0.3\"/>\n"

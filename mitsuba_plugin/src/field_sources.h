@@ -309,6 +309,8 @@ public:
     }
     ::mf::ValueRange range() const override { return range_; }
     const ::mf::Rgb* constant() const override { return constant_ ? &value_ : nullptr; }
+    /// Mitsuba's own mean over the texture's domain.
+    float mean() const override { return static_cast<float>(dr::slice(texture_->mean())); }
 
 private:
     mitsuba::ref<const MiTexture> texture_;

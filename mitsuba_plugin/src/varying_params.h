@@ -16,8 +16,8 @@
 // cpp_host/src/medium_field.h maps them to the library's local parameters and segment bounds for
 // both renderers. The parameters, their channels and their checks are mfrender's: sigma, variance,
 // alpha, alpha_u, alpha_v, lengthscale* (1 channel, > 0), alpha_z (>= 0), specular_reflectance
-// and reflectance (1 or 3 channels, in [0, 1]), and the local anisotropy Sigma of seeds/004
-// Eqs. 25-26 as `anisotropy` (a 6-channel gridvolume, Mitsuba's sggx order xx, yy, zz, xy, xz, yz,
+// and reflectance (1 or 3 channels, in [0, 1]), and the local anisotropy Sigma of
+// seeds/004 Eqs. 25-26 as `anisotropy` (a 6-channel gridvolume, Mitsuba's sggx order xx, yy, zz, xy, xz, yz,
 // world space) or as its halves `anisotropy_diagonal` and `anisotropy_offdiagonal` (3 channels
 // each: gridvolumes of one layout, or rgb constvolumes), every matrix positive definite. Every
 // voxel is checked, a texture by its bounds; a texture cannot give the anisotropy (a matrix in

@@ -1,37 +1,32 @@
 /* C ABI test of libmacrofacet: calls every function declared in include/macrofacet.h (the test
- * `abi_test_covers_header` fails when a declared function is not called here).
+ * `abi_test_covers_header` fails when a declared function is not called here), each at least once
+ * with valid and with invalid arguments. It tests the ABI, not the physics: the physics is checked
+ * by the Rust tests (the .rs files in tests/), and tests/ffi_abi.rs checks that every FFI result equals the
+ * core's bit for bit.
  *
- * What it checks, and why the tolerances are what they are:
+ * What it checks:
  *  - Struct layout: sizes and offsets equal the numbers tests/ffi_abi.rs checks on the Rust side
  *    (exact: a layout mismatch is an ABI break).
- *  - Version and status strings: mf_version() == MF_VERSION_STRING == MAJOR.MINOR.PATCH; every
- *    status has its own description; unknown codes give "unknown status" (exact).
- *  - Construction from named parameters for every distribution, the kernel form, the conductor
- *    presets, eta/k, diffuse flakes and the Eq. 40 mixture; and every way construction fails
- *    (status, message naming the parameter, out-parameter untouched).
- *  - Physics identities against formulas evaluated here, independently of the library:
- *      sigma_t(f, d) / rho(f) == sigma(d) == Lambda(d) cos(theta_d) with Lambda of Eq. 32, and
- *      Smith's G1: the transmittance from f = h upward to +inf equals Phi(h/sigma)^Lambda.
- *    Tolerance 1e-10 relative: the library evaluates these in cancellation-free forms (erfc,
- *    erfcx, log Phi), this test with the textbook forms (erf(a) - 1, pow); for the directions used
- *    (a <= 3) the textbook forms lose at most ~4 digits of the 16. Shell extent 8 makes the
- *    truncation factor Phi(8)^Lambda differ from 1 by < 1e-15.
- *  - transmittance == exp(-optical_depth) (1e-15 relative: the same libm exp on both sides, so it
- *    is exact in practice; the margin allows one rounding), optical depth additivity (1e-12: a
- *    difference of logarithms), free flights invert the transmittance (1e-9: Newton stops at
- *    1e-14 relative in t), majorant bounds.
- *  - Phase function: the projected-area-weighted symmetry p(wi,wo) sigma(-wi) == p(wo,wi)
- *    sigma(-wo) (1e-12; exact up to the rounding of wi.m vs wo.m); sampled directions have
- *    pdf > 0, pdf(wi, wo) == sample.pdf and weight == eval / pdf (1e-9: wo is re-reflected and the
- *    half vector recomputed); for conductors weight == Fresnel(wi.m) from a complex-arithmetic
- *    Fresnel written here (1e-10); mirror weight == 1 and diffuse weight == albedo exactly.
+ *  - Conventions: mf_version() == MF_VERSION_STRING == MAJOR.MINOR.PATCH; every status has its own
+ *    description and unknown codes give "unknown status"; mf_last_error_message with any buffer
+ *    (length query, truncation, size 1, NULL); for every entry point and every kind of bad argument
+ *    (NULL handle / out-pointer / frame / u, NaN and non-unit directions, NaN or infinite f,
+ *    negative t, u outside [0,1)) the exact status, a message naming the problem and the
+ *    out-parameter untouched (pre-filled sentinel bytes); *_free(NULL) is a no-op and every handle
+ *    created is freed (the ASan build checks for leaks).
+ *  - Parameters by name: every construction route of the parameter table builds, the kernel form
+ *    equals the roughness form bit for bit, every way construction fails (unknown name, wrong
+ *    type, missing, conflicting, out of range) gives its status and names the parameter.
+ *  - Outputs within their documented ranges; phase samples consistent across entry points
+ *    (pdf == mf_phase_pdf, weight == eval / pdf, 1e-9: wo is re-reflected and the half vector
+ *    recomputed); conductor weights equal a complex-arithmetic Fresnel written here (1e-10: it
+ *    also checks that eta/k set by name reach each channel).
  *  - A few values against numbers printed once from the Rust core (1e-12 relative: the same code
- *    runs, but another libm may round exp/log differently in the last place).
- *  - Batches equal single calls bit for bit (same code path, no tolerance).
- *  - Bad calls for every entry point: NULL handle / out-pointer / frame / u, NaN and non-unit
- *    directions, NaN or infinite f, negative t, u outside [0,1), bad parameters: the exact status,
- *    a message naming the problem, and the out-parameter untouched (pre-filled sentinel bytes).
- *  - *_free(NULL) is a no-op; every handle created is freed (the ASan build checks for leaks).
+ *    runs, but another libm may round exp/log differently in the last place): catches ABI-level
+ *    breakage (argument order, struct layout) that a self-consistent test would miss.
+ *  - Batches equal single calls bit for bit and are validated before anything is written.
+ *  - Callbacks (host surfaces and segment bounds, fields, the gpis signed distance), including
+ *    callbacks that fail or answer NaN: reported at their first bad answer with a status.
  */
 #include "macrofacet.h"
 
@@ -160,39 +155,12 @@ static const mf_frame FRAME_Z = {{0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}};
 /* A tilted frame given unnormalised: n = (1,2,2)/3, tangent (2,1,-2)/3 (orthogonal). */
 static const mf_frame FRAME_TILTED = {{1.0, 2.0, 2.0}, {2.0, 1.0, -2.0}};
 
-/* ------------------------------------------------------------------------------ reference maths */
+/* ------------------------------------------------------------------------------ Fresnel */
 
-static double normal_cdf(double x) { return 0.5 * erfc(-x / sqrt(2.0)); }
-static double normal_pdf(double x) { return exp(-0.5 * x * x) / sqrt(2.0 * PI); }
-/* Flake density rho(f) = phi(f/sigma) / (sigma Phi(f/sigma)), Eq. 13. */
-static double density(double f, double sigma) { return normal_pdf(f / sigma) / (sigma * normal_cdf(f / sigma)); }
-
-/* Smith's Lambda of Eq. 32 for a direction with positive z (local frame):
- * Lambda = exp(-a^2) / (2 a sqrt(pi)) + (erf(a) - 1) / 2, with erf(a) - 1 written as -erfc(a)
- * (the same number; erf(a) rounds to 1 for a > 6 and the difference would vanish). */
-static double lambda_gaussian(mf_vec3 d, double ax, double ay, double az) {
-  double s = sqrt(ax * ax * d.x * d.x + ay * ay * d.y * d.y + az * az * d.z * d.z);
-  double a = d.z / s;
-  return exp(-a * a) / (2.0 * a * sqrt(PI)) - erfc(a) / 2.0;
-}
-/* GGX Lambda for positive z: (-1 + sqrt(1 + 1/a^2)) / 2, a = cos / (alpha_phi sin). */
-static double lambda_ggx(mf_vec3 d, double ax, double ay) {
-  double s = sqrt(ax * ax * d.x * d.x + ay * ay * d.y * d.y);
-  double a = d.z / s;
-  return 0.5 * (-1.0 + sqrt(1.0 + 1.0 / (a * a)));
-}
-/* sigma(d) = projected area against propagation along d: Lambda(d) cos(theta_d) for d up,
- * (1 + Lambda(-d)) cos(theta_-d) for d down. `lambda` takes an upward local direction. */
-typedef double (*lambda_fn)(mf_vec3 d, const double *alpha);
-static double lambda_gauss_cb(mf_vec3 d, const double *a) { return lambda_gaussian(d, a[0], a[1], a[2]); }
-static double lambda_ggx_cb(mf_vec3 d, const double *a) { return lambda_ggx(d, a[0], a[1]); }
-static double projected_sigma(mf_vec3 d_local, lambda_fn lambda, const double *alpha) {
-  if (d_local.z > 0.0) return lambda(d_local, alpha) * d_local.z;
-  mf_vec3 up = scale(d_local, -1.0);
-  return (1.0 + lambda(up, alpha)) * up.z;
-}
-
-/* Unpolarised Fresnel reflectance of a conductor, from complex amplitudes (n = eta + i k). */
+/* Unpolarised Fresnel reflectance of a conductor, from complex amplitudes (n = eta + i k). It stays
+ * here because it checks that eta and k set by name reach each colour channel of the flakes, and
+ * because no Rust test compares src/fresnel.rs with an independent formula exactly (the Heitz walk
+ * of tests/heitz_random_walk.rs does so only statistically, through gold's per-channel albedo). */
 static double fresnel_conductor(double cos_i, double eta, double k) {
   double complex n = eta + k * I;
   double complex n2 = n * n;
@@ -501,7 +469,7 @@ static void test_medium_variants(void) {
     mf_medium_free(m);
   }
 
-  /* Kernel form: alpha_i = sqrt(2) sigma / l_i (Eq. 4). The same medium given by alphas computed
+  /* Kernel form: alpha_i = sqrt(2) sigma / l_i (seeds/000 Eq. 4). The same medium given by alphas computed
    * here with the same IEEE operations answers bit for bit the same. */
   const double var = 0.04, lx = 0.5, ly = 0.7, lz = 1.3;
   const double sigma = sqrt(var);
@@ -538,129 +506,44 @@ static void test_medium_variants(void) {
   mf_medium_free(mi2);
 }
 
-/* sigma_t / rho == Lambda cos (Eq. 31/32), transmittance identities, Smith G1, free flights. */
-static void test_extinction_identities(void) {
+/* The ranges every medium query promises after MF_OK (README "Fuzzing"): sigma_t, the majorant
+ * and the optical depth are finite and >= 0, the majorant bounds sigma_t at both ends, the
+ * transmittance lies in [0, 1], a free flight stops in [0, t_max]. The values themselves are the
+ * core's (tests/ffi_abi.rs compares them bit for bit; tests/free_flight.rs checks the physics). */
+static void test_query_ranges(void) {
   mf_medium *m = gpss_conductor();
-  const double k = 8.0, sigma = GPSS_SIGMA;
   double top = 0;
   EXPECT_OK(mf_medium_shell_top(m, &top));
-  CHECK(top == k * sigma, "top %.17g", top);
-
-  struct {
-    const char *name;
-    mf_medium *m;
-    lambda_fn lambda;
-    double alpha[3];
-  } media[3];
-  media[0].name = "gpss";
-  media[0].m = m;
-  media[0].lambda = lambda_gauss_cb;
-  memcpy(media[0].alpha, GPSS_ALPHA, sizeof GPSS_ALPHA);
-  {
-    const named_float f[] = {{"sigma", sigma}, {"shell_extent", k}, {"alpha_u", 0.25}, {"alpha_v", 0.5}, {NULL, 0}};
-    media[1].name = "beckmann";
-    media[1].m = build(f, (const char *[]){"distribution", "beckmann", "material", "Cu", NULL}, NULL, NULL, NULL, NULL);
-    media[1].lambda = lambda_gauss_cb;
-    media[1].alpha[0] = 0.25, media[1].alpha[1] = 0.5, media[1].alpha[2] = 0.0;
-    media[2].name = "ggx";
-    media[2].m = build(f, (const char *[]){"distribution", "ggx", NULL}, NULL, NULL, NULL, NULL);
-    media[2].lambda = lambda_ggx_cb;
-    media[2].alpha[0] = 0.25, media[2].alpha[1] = 0.5, media[2].alpha[2] = 0.0;
-  }
+  CHECK(top == 8.0 * GPSS_SIGMA, "top %.17g, expected shell_extent * sigma", top);
   const mf_frame *frames[2] = {&FRAME_Z, &FRAME_TILTED};
-  const double thetas[] = {0.2, 0.7, 1.1, 1.35, PI - 1.2, PI - 0.4};
-  const double phis[] = {0.0, 0.9, 2.5, 4.0};
-  const double fs[] = {-1.3, -0.4, 0.0, 0.35, 1.2};
-
-  for (int mi = 0; mi < 3; ++mi) {
-    for (int fi = 0; fi < 2; ++fi) {
-      basis b = basis_of(*frames[fi]);
-      for (size_t ti = 0; ti < sizeof thetas / sizeof thetas[0]; ++ti) {
-        for (size_t pi = 0; pi < sizeof phis / sizeof phis[0]; ++pi) {
-          mf_vec3 dl = spherical(thetas[ti], phis[pi]);
-          mf_vec3 d = to_world(b, dl);
-          double sig = projected_sigma(to_local(b, d), media[mi].lambda, media[mi].alpha);
-          for (size_t i = 0; i < sizeof fs / sizeof fs[0]; ++i) {
-            double st = -1.0;
-            EXPECT_OK(mf_medium_sigma_t(media[mi].m, frames[fi], fs[i], d, &st));
-            CHECK_REL(st / density(fs[i], sigma), sig, 1e-10);
-            /* Majorant over [f, f + 0.5]: sigma_t at the lower end bounds the segment. */
-            double maj = -1.0, st_hi = -1.0;
-            EXPECT_OK(mf_medium_majorant(media[mi].m, frames[fi], fs[i] + 0.5, fs[i], d, &maj));
-            EXPECT_OK(mf_medium_sigma_t(media[mi].m, frames[fi], fs[i] + 0.5, d, &st_hi));
-            CHECK(maj >= st && maj >= st_hi, "majorant %g < sigma_t %g / %g", maj, st, st_hi);
-
-            /* transmittance == exp(-optical depth), additivity of the optical depth. */
-            double tau = -1, tr = -1, tau1 = -1, tau2 = -1;
-            const double t1 = 0.3, t2 = 0.45;
-            EXPECT_OK(mf_medium_optical_depth(media[mi].m, frames[fi], fs[i], d, t1 + t2, &tau));
-            EXPECT_OK(mf_medium_transmittance(media[mi].m, frames[fi], fs[i], d, t1 + t2, &tr));
-            CHECK_REL(tr, exp(-tau), 1e-15);
-            EXPECT_OK(mf_medium_optical_depth(media[mi].m, frames[fi], fs[i], d, t1, &tau1));
-            double f_mid = fs[i] + t1 * dot(d, b.n);
-            EXPECT_OK(mf_medium_optical_depth(media[mi].m, frames[fi], f_mid, d, t2, &tau2));
-            CHECK_REL(tau1 + tau2, tau, 1e-12);
-            CHECK(tau > 0, "optical depth %g", tau);
-
-            if (dl.z > 0) {
-              /* Smith G1 = Phi(h/sigma)^Lambda (seeds/002 Eq. 20): upward to infinity. */
-              double g1 = -1;
-              EXPECT_OK(mf_medium_transmittance(media[mi].m, frames[fi], fs[i], d, INFINITY, &g1));
-              double lambda = media[mi].lambda(to_local(b, d), media[mi].alpha);
-              CHECK_REL(g1, pow(normal_cdf(fs[i] / sigma), lambda), 1e-10);
-            } else {
-              /* Downward to infinity: the interior is opaque. */
-              double t_inf = -1;
-              EXPECT_OK(mf_medium_transmittance(media[mi].m, frames[fi], fs[i], d, INFINITY, &t_inf));
-              CHECK(t_inf == 0.0, "downward transmittance to infinity %g", t_inf);
-            }
-          }
-        }
-      }
-    }
-  }
-  /* Above the shell, going up: nothing to meet. */
-  double t_above = -1;
-  EXPECT_OK(mf_medium_transmittance(m, &FRAME_Z, top + 0.1, v3(0, 0, 1), INFINITY, &t_above));
-  CHECK(t_above == 1.0, "transmittance above the shell %.17g", t_above);
-  double st_above = -1;
-  EXPECT_OK(mf_medium_sigma_t(m, &FRAME_Z, top + 0.1, v3(0, 0, -1), &st_above));
-  CHECK(st_above == 0.0, "sigma_t above the shell %g", st_above);
-
-  /* Free flights invert the transmittance: a collision at t has tau(t) = -ln(1 - u). */
+  const double fs[] = {-1.3, 0.0, 1.2, top + 0.1};
   for (int fi = 0; fi < 2; ++fi) {
     basis b = basis_of(*frames[fi]);
-    const mf_vec3 dirs[] = {spherical(2.5, 0.3), spherical(1.2, 2.0), spherical(0.4, 4.0)};
-    for (size_t di = 0; di < 3; ++di) {
-      mf_vec3 d = to_world(b, dirs[di]);
-      for (int j = 0; j < 20; ++j) {
-        double u = (j + 0.5) / 20.0, f0 = 0.3;
-        mf_free_flight fl = {false, -1.0};
-        const double t_max = 4.0;
-        EXPECT_OK(mf_medium_sample_free_flight(m, frames[fi], f0, d, t_max, u, &fl));
-        double tau_max = -1;
-        EXPECT_OK(mf_medium_optical_depth(m, frames[fi], f0, d, t_max, &tau_max));
-        double target = -log1p(-u);
-        if (fl.scattered) {
-          double tau_t = -1;
-          CHECK(fl.t >= 0 && fl.t <= t_max, "t = %g outside [0, %g]", fl.t, t_max);
-          EXPECT_OK(mf_medium_optical_depth(m, frames[fi], f0, d, fl.t, &tau_t));
-          CHECK_REL(tau_t, target, 1e-9);
-        } else {
-          CHECK(fl.t == t_max, "pass with t = %g", fl.t);
-          CHECK(target >= tau_max, "passed although -ln(1-u) = %g < tau(t_max) = %g", target, tau_max);
-        }
+    for (int i = 0; i < 12; ++i) {
+      const mf_vec3 d = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
+      for (size_t k = 0; k < sizeof fs / sizeof fs[0]; ++k) {
+        const double f = fs[k], t_max = (i % 3 == 0) ? INFINITY : 2.0 * uniform01();
+        double st = -1, st_hi = -1, maj = -1, tau = -1, tr = -1;
+        EXPECT_OK(mf_medium_sigma_t(m, frames[fi], f, d, &st));
+        EXPECT_OK(mf_medium_sigma_t(m, frames[fi], f + 0.5, d, &st_hi));
+        EXPECT_OK(mf_medium_majorant(m, frames[fi], f + 0.5, f, d, &maj));
+        EXPECT_OK(mf_medium_optical_depth(m, frames[fi], f, d, t_max, &tau));
+        EXPECT_OK(mf_medium_transmittance(m, frames[fi], f, d, t_max, &tr));
+        CHECK(isfinite(st) && st >= 0 && isfinite(maj) && maj >= st && maj >= st_hi, "sigma_t %g, majorant %g", st,
+              maj);
+        CHECK(tau >= 0 && !isnan(tau) && tr >= 0 && tr <= 1, "optical depth %g, transmittance %g", tau, tr);
+        mf_free_flight fl = {false, -1};
+        EXPECT_OK(mf_medium_sample_free_flight(m, frames[fi], f, d, t_max, uniform01(), &fl));
+        CHECK(fl.t >= 0 && (fl.scattered ? fl.t <= t_max : fl.t == t_max), "free flight t %g (t_max %g)", fl.t, t_max);
       }
     }
   }
-  mf_medium_free(media[1].m);
-  mf_medium_free(media[2].m);
   mf_medium_free(m);
 }
 
 /* Checks sampled directions against eval/pdf for one medium. With `spec` non-NULL the weight must
  * also equal the flake reflectance: Fresnel(eta, k) (or 1 when eta is NULL) times spec; that holds
- * for exact vNDF sampling only (the Eq. 40 mixture weights by D_wi / pdf as well). */
+ * for exact vNDF sampling only (the seeds/000 Eq. 40 mixture weights by D_wi / pdf as well). */
 static void check_phase_sampling(const char *name, mf_medium *m, const mf_frame *frame, const double *eta,
                                  const double *k, const double *spec, int diffuse_albedo, const double *albedo) {
   basis b = basis_of(*frame);
@@ -713,22 +596,6 @@ static void check_phase_sampling(const char *name, mf_medium *m, const mf_frame 
 static void test_phase(void) {
   mf_medium *m = gpss_conductor();
   const double one[3] = {1, 1, 1};
-  /* Projected-area-weighted symmetry of the specular phase function. */
-  for (int i = 0; i < 100; ++i) {
-    const mf_frame *frame = (i & 1) ? &FRAME_TILTED : &FRAME_Z;
-    basis b = basis_of(*frame);
-    mf_vec3 wi = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
-    mf_vec3 wo = to_world(b, spherical(acos(1.0 - 2.0 * uniform01()), 2.0 * PI * uniform01()));
-    mf_rgb p_io, p_oi;
-    double a_i = -1, a_o = -1;
-    EXPECT_OK(mf_phase_eval(m, frame, wi, wo, &p_io));
-    EXPECT_OK(mf_phase_eval(m, frame, wo, wi, &p_oi));
-    EXPECT_OK(mf_medium_sigma_t(m, frame, 0.0, scale(wi, -1.0), &a_i));
-    EXPECT_OK(mf_medium_sigma_t(m, frame, 0.0, scale(wo, -1.0), &a_o));
-    CHECK(p_io.r >= 0 && p_io.g >= 0 && p_io.b >= 0, "negative phase value");
-    CHECK_REL(p_io.r * a_i, p_oi.r * a_o, 1e-12);
-    CHECK_REL(p_io.b * a_i, p_oi.b * a_o, 1e-12);
-  }
   /* Back-to-back directions: no half vector, zero value and density. */
   mf_rgb zero = {-1, -1, -1};
   double zpdf = -1;
@@ -1213,39 +1080,26 @@ static void test_gpis(void) {
   CHECK(a.normal.z > 0.0 && fabs(a.normal.x * a.normal.x + a.normal.y * a.normal.y + a.normal.z * a.normal.z - 1) < 1e-12,
         "normal (%g %g %g) must be unit and face the ray", a.normal.x, a.normal.y, a.normal.z);
 
-  /* First-crossing heights along d from above follow, in Smith's independence approximation,
-   * the CDF Phi(h)^(1 + Lambda(-d)) (seeds/002 Eq. 20 integrated); the realizations carry real
-   * correlations, which shift the mean by a few hundredths (design notes: ~0.01 in
-   * transmittance). Tolerance: 4 standard errors + 0.06 model error. Lambda from Eq. 32 (alpha 1). */
-  const double thetas[2] = {0.0, 80.0 * PI / 180.0};
-  for (int k = 0; k < 2; ++k) {
-    const mf_vec3 d = v3(sin(thetas[k]), 0, -cos(thetas[k]));
-    const double a_up = cos(thetas[k]); /* a of Eq. 32 for -d with alpha_x = alpha_y = alpha_z = 1 */
-    const double lambda = exp(-a_up * a_up) / (2 * a_up * sqrt(PI)) + 0.5 * (erf(a_up) - 1);
-    const double n = 1.0 + lambda;
-    double expected = 0;
-    for (double h = -10; h < 10; h += 1e-3) {
-      const double cdf = 0.5 * erfc(-h / SQRT2), pdf = exp(-0.5 * h * h) / sqrt(2 * PI);
-      expected += h * n * pow(cdf, n - 1) * pdf * 1e-3;
-    }
-    double sum = 0, sum2 = 0;
-    int hits = 0, distinct = 0;
+  /* The seed is the whole random state of a trace (no generator lives in the handle): other seeds
+   * give other realizations, every downward ray meets the plane's realization somewhere, and a
+   * seed repeated after others gives its first answer again. Their statistics against Smith's
+   * model: tests/gpis.rs (smith_masking_upward, transmittance_matches_macrofacet_...). */
+  {
+    const mf_vec3 d = v3(sin(1.2), 0, -cos(1.2));
     const mf_vec3 origin = v3(-envelope * d.x / d.z, 0, envelope);
-    for (uint64_t seed = 0; seed < 2000; ++seed) {
+    int hits = 0, distinct = 0;
+    for (uint64_t seed = 0; seed < 50; ++seed) {
       mf_gpis_hit h;
       EXPECT_OK(mf_gpis_trace(g, plane_sdf, NULL, &calls, origin, d, INFINITY, &free_start, seed, &h));
-      if (h.hit) {
-        ++hits;
-        sum += h.point.z;
-        sum2 += h.point.z * h.point.z;
-        distinct += h.t != a.t;
-      }
+      hits += h.hit;
+      distinct += h.hit && h.t != a.t;
+      CHECK(!h.hit || (h.t > 0 && isfinite(h.point.z)), "seed %u: crossing at t = %g", (unsigned)seed, h.t);
     }
-    CHECK(hits == 2000, "a downward ray must always meet the plane's realization (%d of 2000)", hits);
-    const double mean = sum / hits, se = sqrt((sum2 / hits - mean * mean) / hits);
-    CHECK(fabs(mean - expected) < 4 * se + 0.06, "theta %g: mean first-crossing height %g +- %g, Smith %g",
-          thetas[k], mean, se, expected);
+    CHECK(hits == 50, "a downward ray must always meet the plane's realization (%d of 50)", hits);
     CHECK(distinct >= hits - 2, "seeds must change the realization (%d distinct)", distinct);
+    mf_gpis_hit again;
+    EXPECT_OK(mf_gpis_trace(g, plane_sdf, NULL, &calls, v3(0, 0, envelope), down, INFINITY, &free_start, 42, &again));
+    CHECK(again.t == a.t, "seed 42 after other seeds: t %.17g vs %.17g", again.t, a.t);
   }
 
   /* Scattering: gold Fresnel at the reflection angle, mirror direction; behind the normal: invalid. */
@@ -1491,6 +1345,49 @@ static void test_surfaces_and_tracking(void) {
   memcpy(cs_before, cs, sizeof cs);
   EXPECT_STATUS(mf_track_free_flight_batch(m, sphere, NULL, NULL, qs, 3, cs), MF_ERROR_INVALID_ARGUMENT, "query 1");
   CHECK(same_bits(cs_before, cs, sizeof cs), "a failed batch must write nothing");
+  /* mf_track_transmittance and its batch: the same conventions, a failing host surface too. */
+  mf_transmittance tr_out, tr_before;
+  memset(&tr_out, 0xA5, sizeof tr_out);
+  tr_before = tr_out;
+  bad = q;
+  bad.d = v3(0, 0, -2);
+  EXPECT_STATUS(mf_track_transmittance(m, sphere, NULL, NULL, &bad, &tr_out), MF_ERROR_INVALID_ARGUMENT, "d must be a unit vector");
+  EXPECT_STATUS(mf_track_transmittance(NULL, sphere, NULL, NULL, &q, &tr_out), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_track_transmittance(m, NULL, NULL, NULL, &q, &tr_out), MF_ERROR_NULL_POINTER, "surface");
+  EXPECT_STATUS(mf_track_transmittance(m, sphere, NULL, NULL, NULL, &tr_out), MF_ERROR_NULL_POINTER, "query");
+  EXPECT_STATUS(mf_track_transmittance(m, sphere, NULL, NULL, &q, NULL), MF_ERROR_NULL_POINTER, "out_transmittance");
+  hs.mode = 3;
+  hs.calls = 0;
+  EXPECT_STATUS(mf_track_transmittance(m, callbacks, NULL, &hs, &q, &tr_out), MF_ERROR_CALLBACK, "returned 42");
+  CHECK(hs.calls == 1, "a failing host surface must end the call at once (%d calls)", hs.calls);
+  hs.mode = 0;
+  CHECK(same_bits(&tr_before, &tr_out, sizeof tr_out), "mf_track_transmittance wrote its out-parameter on failure");
+  mf_transmittance ts_bad[3], ts_before[3];
+  memset(ts_bad, 0xA5, sizeof ts_bad);
+  memcpy(ts_before, ts_bad, sizeof ts_bad);
+  EXPECT_STATUS(mf_track_transmittance_batch(m, sphere, NULL, NULL, qs, 3, ts_bad), MF_ERROR_INVALID_ARGUMENT, "query 1");
+  EXPECT_STATUS(mf_track_transmittance_batch(m, sphere, NULL, NULL, NULL, 3, ts_bad), MF_ERROR_NULL_POINTER, "queries");
+  EXPECT_STATUS(mf_track_transmittance_batch(NULL, sphere, NULL, NULL, qs, 3, ts_bad), MF_ERROR_NULL_POINTER, "medium");
+  CHECK(same_bits(ts_before, ts_bad, sizeof ts_bad), "a failed transmittance batch must write nothing");
+  EXPECT_OK(mf_track_transmittance_batch(m, sphere, NULL, NULL, NULL, 0, NULL));
+
+  /* mf_phase_eval_pdf: bad directions, frame and pointers. */
+  mf_phase_value pv_out, pv_before;
+  memset(&pv_out, 0xA5, sizeof pv_out);
+  pv_before = pv_out;
+  EXPECT_STATUS(mf_phase_eval_pdf(NULL, &FRAME_Z, wi, wo, &pv_out), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_phase_eval_pdf(m, NULL, wi, wo, &pv_out), MF_ERROR_NULL_POINTER, "frame");
+  EXPECT_STATUS(mf_phase_eval_pdf(m, &FRAME_Z, v3(NAN, 0, 1), wo, &pv_out), MF_ERROR_INVALID_ARGUMENT, "wi must be finite");
+  EXPECT_STATUS(mf_phase_eval_pdf(m, &FRAME_Z, wi, v3(1, 1, 0), &pv_out), MF_ERROR_INVALID_ARGUMENT, "wo must be a unit vector");
+  EXPECT_STATUS(mf_phase_eval_pdf(m, &FRAME_Z, wi, wo, NULL), MF_ERROR_NULL_POINTER, "out_value");
+  CHECK(same_bits(&pv_before, &pv_out, sizeof pv_out), "mf_phase_eval_pdf wrote its out-parameter on failure");
+
+  /* mf_surface_bounding_box: both out-pointers are checked before either is written. */
+  mf_vec3 lo_keep = {7, 7, 7}, hi_keep = {8, 8, 8};
+  EXPECT_STATUS(mf_surface_bounding_box(NULL, &lo_keep, &hi_keep), MF_ERROR_NULL_POINTER, "surface");
+  EXPECT_STATUS(mf_surface_bounding_box(mesh, &lo_keep, NULL), MF_ERROR_NULL_POINTER, "out_max");
+  EXPECT_STATUS(mf_surface_bounding_box(mesh, NULL, &hi_keep), MF_ERROR_NULL_POINTER, "out_min");
+  CHECK(lo_keep.x == 7 && hi_keep.x == 8, "mf_surface_bounding_box wrote an out-parameter on failure");
 #undef TRACK_CASE
 
   /* Surface construction errors. */
@@ -1563,6 +1460,10 @@ static void test_surfaces_and_tracking(void) {
   double max_x = -1e300;
   for (size_t i = 0; i < em.vertex_count; ++i) max_x = em.positions[3 * i] > max_x ? em.positions[3 * i] : max_x;
   CHECK(max_x >= 2 + top, "the enclosure must reach beyond the shell (%g)", max_x);
+  mf_mesh em_keep = em;
+  EXPECT_STATUS(mf_enclosure_mesh(NULL, &em_keep), MF_ERROR_NULL_POINTER, "enclosure");
+  EXPECT_STATUS(mf_enclosure_mesh(e, NULL), MF_ERROR_NULL_POINTER, "out_mesh");
+  CHECK(same_bits(&em_keep, &em, sizeof em), "mf_enclosure_mesh wrote its out-parameter on failure");
   mf_enclosure_free(e);
   mf_enclosure_free(NULL);
   EXPECT_STATUS(mf_surface_enclosure(sphere, NULL, NAN, 0.0, &e), MF_ERROR_INVALID_ARGUMENT, "level");
@@ -1875,20 +1776,18 @@ static void expect_ndf_error(const named_float *floats, const char *const *strin
 }
 
 static void test_ndf(void) {
-  /* GTR with gamma = 2 is GGX (seeds/001 Eq. 32 vs 37). */
+  /* GTR by name through mf_ndf_new: D and Lambda are finite and positive above the horizon
+   * (their values: tests/ndf.rs, e.g. gtr_at_gamma_2_is_ggx_and_the_berry_limit_is_continuous;
+   * FFI == core bit for bit: tests/ffi_abi.rs ndf_calls_equal_the_core_bit_for_bit). */
   const named_float f2[] = {{"alpha", 0.3}, {"gamma", 2.0}, {NULL, 0}};
   const char *const gtr[] = {"distribution", "gtr", NULL};
   mf_ndf *n = build_ndf(f2, gtr);
-  const double a = 0.3;
   for (int i = 0; i < 20; ++i) {
     mf_vec3 w = spherical(0.2 + 0.06 * i, 0.3 * i);
-    double d = 0, lambda = 0;
+    double d = -1, lambda = -1;
     EXPECT_OK(mf_ndf_eval(n, &FRAME_Z, w, &d));
-    double q = (w.x * w.x + w.y * w.y) / (a * a) + w.z * w.z;
-    CHECK_REL(d, 1.0 / (PI * a * a * q * q), 1e-12);
     EXPECT_OK(mf_ndf_lambda(n, &FRAME_Z, w, &lambda));
-    const double alpha[2] = {a, a};
-    CHECK_REL(lambda, lambda_ggx_cb(w, alpha), 1e-9);
+    CHECK(isfinite(d) && d > 0 && isfinite(lambda) && lambda > 0, "D %g, Lambda %g", d, lambda);
   }
   double horizon = 0;
   EXPECT_OK(mf_ndf_lambda(n, &FRAME_Z, v3(1, 0, 0), &horizon));
@@ -1980,7 +1879,7 @@ int main(void) {
   test_params_errors();
   test_medium_new_errors();
   test_medium_variants();
-  test_extinction_identities();
+  test_query_ranges();
   test_phase();
   test_reference_values();
   test_batches();

@@ -208,7 +208,7 @@ pub unsafe extern "C" fn mf_medium_shell_top(medium: *const mf_medium, out_top: 
     })
 }
 
-/// Extinction `sigma_t(f, d)` (Eq. 14) at signed distance `f` for propagation direction `d`.
+/// Extinction `sigma_t(f, d)` (seeds/000 Eq. 14) at signed distance `f` for propagation direction `d`.
 ///
 /// # Safety
 /// Pointers must be NULL or valid.
@@ -350,7 +350,7 @@ fn phase_eval(m: &MacrofacetMedium, q: &mf_phase_query) -> FfiResult<(mf_rgb, f6
     Ok((rgb(value), pdf))
 }
 
-/// The phase function `p(wi, wo)` per channel (Eq. 11, flake reflectance included).
+/// The phase function `p(wi, wo)` per channel (seeds/000 Eq. 11, flake reflectance included).
 ///
 /// # Safety
 /// Pointers must be NULL or valid.

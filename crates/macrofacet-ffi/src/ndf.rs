@@ -27,7 +27,7 @@ pub struct mf_ndf_sample {
     /// The microfacet normal, world space.
     pub m: mf_vec3,
     /// Its density per solid angle, `D_wi(m) = <wi, m> D(m) / ((1 + Λ(wi)) cos θ_wi)` with the
-    /// exact projected area of `D` (Eq. 27 of seeds/001).
+    /// exact projected area of `D` (seeds/001 Eq. 27).
     pub pdf: f64,
     pub valid: bool,
 }

@@ -122,3 +122,34 @@ fn fuzz_majorant_bounds_sigma_t_at_both_ends() {
     let majorant = medium.majorant(f_a, f_b, d);
     assert!(majorant >= medium.sigma_t(f_a, d) && majorant >= medium.sigma_t(f_b, d), "{majorant}");
 }
+
+/// Found by fuzzing (`fuzz/`, target `medium_queries`): one ulp below a top face at 39.8σ
+/// (σ = 1e50), rising at `d_z = 1e-300` to `t = +inf`, the nearly parallel rule formed
+/// `∞ · 0` (the density underflows there): τ = NaN.
+#[test]
+fn fuzz_infinite_segment_where_the_density_underflows_is_not_nan() {
+    let medium = medium(&[("sigma", 1e50), ("shell_extent", 3.9810717055349734e1), ("alpha", 1e6)], "ggx");
+    let d = DVec3::new(0.0, 1.0, 1e-300);
+    let f = 3.981071705534973e51;
+    assert_eq!(medium.optical_depth(f, d, f64::INFINITY), 0.0);
+    assert_eq!(medium.transmittance(f, d, f64::INFINITY), 1.0);
+    assert_eq!(medium.sample_free_flight(f, d, f64::INFINITY, 0.999), FreeFlight::Pass);
+}
+
+/// Found by fuzzing (`fuzz/`, target `medium_queries`): one ulp below the top face, rising so
+/// little that `f0 + t d_z` rounds onto the face, a segment of 2.8e-66 counted its whole length
+/// inside while it leaves the shell after 2.7e-66, so it transmitted less than a segment 55×
+/// longer.
+#[test]
+fn fuzz_longer_segment_from_below_the_top_face_transmits_no_more() {
+    let mut params = ParamSet::new();
+    params.set_float("sigma", 1e-50);
+    params.set_float("shell_extent", 9.22239057924383e-1);
+    params.set_float("lengthscale_x", 1.4142135623730952e-44);
+    params.set_float("lengthscale_y", 1.4142135623730953e-56);
+    params.set_string("distribution", "ggx");
+    let medium = medium_from_params(&params).unwrap();
+    let (f, d) = (9.222390579243828e-51, DVec3::new(0.3, 0.8, 0.487).normalize());
+    let (short, long) = (2.7855618193418084e-66, 1.535836554474395e-64);
+    assert!(medium.transmittance(f, d, short) >= medium.transmittance(f, d, long));
+}

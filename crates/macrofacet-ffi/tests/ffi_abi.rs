@@ -792,7 +792,7 @@ fn issue9_gpis_cases_through_the_abi() {
     unsafe { mf_gpis_free(gpis) };
 }
 
-/// Found by fuzzing (target `phase`): the Eq. 40 mixture at grazing incidence (a frame normal of
+/// Found by fuzzing (target `phase`): the seeds/000 Eq. 40 mixture at grazing incidence (a frame normal of
 /// length 1e308, now accepted) with `u = 0` samples a normal at `wi·m ≈ 1e-310`, whose density
 /// `(1 − R)/(2π · 4 wi·m)` overflows: a valid sample had `pdf = inf`. Such a sample has weight 0
 /// and is not returned.

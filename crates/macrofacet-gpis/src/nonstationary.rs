@@ -1,4 +1,4 @@
-//! The non-stationary kernel of seeds/004 Sec. 6.1 (Paciorek–Schervish, Eqs. 25–26) with a
+//! The non-stationary kernel of seeds/004 Sec. 6.1 (Paciorek–Schervish, seeds/004 Eqs. 25–26) with a
 //! squared-exponential `k^S(t) = exp(−t²/2)`, its local variance `σ(x)` and local anisotropy
 //! `Σ(x)` taken from a [`MediumField`] — the same fields the macrofacet medium reads
 //! ([`macrofacet::field`]):

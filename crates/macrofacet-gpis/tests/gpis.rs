@@ -63,7 +63,7 @@ fn kernel_derivatives_match_finite_differences() {
             assert!((fd - cf).abs() < 1e-6, "cov(d{i}f, d{j}f): {cf} vs {fd}");
         }
     }
-    // Roughness link α = √2 σ / l (Eq. 4) and the gradient variance α²/2 · ... = σ²/l².
+    // Roughness link α = √2 σ / l (seeds/004 Eq. 4) and the gradient variance α²/2 · ... = σ²/l².
     let k = SeKernel::from_roughness(2.0, DVec3::new(0.5, 1.0, 0.0)).unwrap();
     assert!((k.lengthscale.x - SQRT_2 * 2.0 / 0.5).abs() < 1e-12 && k.lengthscale.z == f64::INFINITY);
     assert!((k.roughness() - DVec3::new(0.5, 1.0, 0.0)).abs().max_element() < 1e-12);

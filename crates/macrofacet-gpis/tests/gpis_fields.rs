@@ -188,7 +188,7 @@ fn kernel_is_positive_semidefinite_for_smooth_stepped_and_height_field_fields() 
     // matrices are nearly singular, so "positive definite" cannot be asked) and >= −1e-7 × the
     // largest with gradients, whose covariances use the fields' central differences (relative
     // error ~1e-8, module documentation of src/gpis/nonstationary.rs).
-    // The check can fail: the kernel without the prefactor |Σx|^¼|Σy|^¼/|S|^½ of Eq. 25 (a
+    // The check can fail: the kernel without the prefactor |Σx|^¼|Σy|^¼/|S|^½ of seeds/004 Eq. 25 (a
     // "mean lengthscale" kernel, not PSD in general) must give a clearly negative eigenvalue.
     let plane = Plane::default();
     let stepped = Regions { sigma: [0.5, 1.0], alpha: [DVec3::new(0.4, 0.7, 0.5), DVec3::new(1.2, 0.9, 1.5)] };
@@ -427,7 +427,7 @@ fn constant_fields_reproduce_the_stationary_kernel_and_traces() {
 #[test]
 fn piecewise_constant_field_reproduces_the_stationary_gpis_region_by_region() {
     // Two regions x < 0 and x >= 0 with their own σ and roughness. Within one region the kernel
-    // of Eq. 25 is that region's stationary kernel, so a ray that stays in it realizes the
+    // of seeds/004 Eq. 25 is that region's stationary kernel, so a ray that stays in it realizes the
     // stationary process: same seed, the same crossings, bit for bit — every start state, 4 × 200
     // rays per region heading away from the change (origins 0.2 from it: the kernel's reach into
     // the other region does not matter, only the points sampled do). The per-region
@@ -565,7 +565,7 @@ fn planar_sigma_change_against_the_macrofacet_tracker() {
     // and <= 0.06 below; the tracker's two estimators agree within 4.5 SE everywhere.
     //
     // Across a *step* the local-stationary macrofacet medium is not the realizations' law:
-    // σ(x)σ(y) in Eq. 25 makes every realization jump at x = 0 (a cliff; the correlation of the
+    // σ(x)σ(y) in seeds/004 Eq. 25 makes every realization jump at x = 0 (a cliff; the correlation of the
     // normalized heights across it is √(2 l1 l2/(l1² + l2²)) per axis, 0.8 for the height field),
     // which the density ρ(f; σ(x)) cannot express. A ray going up the step (σ 0.5 → 1) meets the
     // cliffs: the realizations' transmittance falls below the tracker's by 0.16 just past it

@@ -1,4 +1,5 @@
-//! Reference formulas written independently of the library (only `libm` and `glam` are used):
+//! Reference formulas written independently of the library's maths (they use `libm`, `glam` and,
+//! for the samplers' random numbers only, the library's seeded generator `stats::Pcg32`):
 //! Gauss–Legendre quadrature, the normal cdf and its inverse, conductor Fresnel from complex
 //! arithmetic, Beckmann and GGX `D`, Smith `Λ` and visible-normal samplers, the analytic
 //! single-scattering microfacet albedo (height-correlated Smith, by quadrature), the Heitz,

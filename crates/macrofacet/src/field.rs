@@ -2,8 +2,8 @@
 //! point by a *field* that the host evaluates (grids, textures, procedures); the library stays
 //! pure. Locally the kernel `σ(x)σ(y) … k(√Q(x, y))` of seeds/004 Eqs. 25–26 is a stationary one
 //! with variance `σ(x)²` and lengthscale matrix `Σ(x)`, so at a point the medium is the stationary
-//! macrofacet medium of those local parameters: `σ_t = ρ(f; σ(x)) σ(d; α(x))` (seeds/000
-//! Eqs. 13–14) with the roughness `α = √2 σ/l` (Eq. 4) or, for a full anisotropy, the roughness
+//! macrofacet medium of those local parameters: `σ_t = ρ(f; σ(x)) σ(d; α(x))` (
+//! seeds/000 Eqs. 13–14) with the roughness `α = √2 σ/l` (seeds/000 Eq. 4) or, for a full anisotropy, the roughness
 //! matrix `Q = 2σ² Rᵀ Σ⁻¹ R` in the local frame `R = (t, b, n)` ([`crate::ndf::GpssMatrix`]).
 //!
 //! For majorants a field bounds its parameters along a segment ([`ParamBounds`]); the tracker
@@ -181,8 +181,8 @@ impl MacrofacetMedium {
     }
 
     /// The isotropic distribution of this medium's family with roughness `alpha` along every
-    /// axis: the projected area seen from any direction grows with every roughness (seeds/000
-    /// Eq. 32 for Gaussian gradients; GGX's Λ grows with α), so this bounds the field's NDFs
+    /// axis: the projected area seen from any direction grows with every roughness (
+    /// seeds/000 Eq. 32 for Gaussian gradients; GGX's Λ grows with α), so this bounds the field's NDFs
     /// whose roughnesses lie below `alpha`.
     pub fn isotropic_ndf(&self, alpha: f64) -> Ndf {
         match self.phase.ndf {

@@ -20,7 +20,7 @@ pub const DEFAULT_SHELL_EXTENT: f64 = 3.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeightProfile {
-    /// Standard deviation of the heights (scene units), Eq. 5.
+    /// Standard deviation of the heights (scene units), seeds/000 Eq. 5.
     pub sigma: f64,
     /// `k`: the shell's top face is at `f = k σ`.
     pub shell_extent: f64,
@@ -38,7 +38,7 @@ impl HeightProfile {
         self.shell_extent * self.sigma
     }
 
-    /// `ρ(f) = φ(f;0,σ²) / Φ(f;0,σ²)` (Eq. 13), zero above the top face.
+    /// `ρ(f) = φ(f;0,σ²) / Φ(f;0,σ²)` (seeds/000 Eq. 13), zero above the top face.
     pub fn density(&self, f: f64) -> f64 {
         if f > self.top() {
             0.0
@@ -103,12 +103,23 @@ impl HeightProfile {
         }
         let (fa, fb) = (f0.min(top), f1.min(top));
         if (fb - fa).abs() <= SMALL_DELTA * self.sigma {
-            // Nearly parallel: the length below the top face times the mean density there.
-            let inside = if above0 || above1 { ((fb - fa) / slope).abs().min(t) } else { t };
+            // Nearly parallel: the length below the top face times the mean density there. The
+            // length comes from where the line meets the face, not from `f1`: `f0 + t·slope`
+            // may round onto the face while the segment leaves it (found by fuzzing: a shorter
+            // segment transmitted less than a longer one).
+            let inside = if slope > 0.0 {
+                t.min((top - f0) / slope)
+            } else if above0 {
+                (t - (f0 - top) / -slope).max(0.0)
+            } else {
+                t
+            };
             let (mid, half) = (0.5 * (fa + fb), 0.5 * (fb - fa));
             let node = half * (0.6f64).sqrt();
             let mean = (5.0 * self.density(mid - node) + 8.0 * self.density(mid) + 5.0 * self.density(mid + node)) / 18.0;
-            return inside * mean;
+            // An infinite length where the density underflows to 0 (near a top face at 40σ,
+            // found by fuzzing) has no flakes: 0, not ∞·0.
+            return if mean == 0.0 { 0.0 } else { inside * mean };
         }
         // Both factors change sign together; rounding may leave a tiny negative value.
         (self.ln_cdf_difference(fa, fb) / slope).max(0.0)

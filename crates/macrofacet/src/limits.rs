@@ -6,8 +6,8 @@
 use crate::error::{Error, ErrorKind, Result};
 
 /// `sigma` (scene units). Products of up to four factors `σ^±1` and `α^±1` — the kernel's
-/// derivative covariances `σ² w_i w_j` with `w_i = α_i²/(2σ²)` (seeds/000 Eq. 4, seeds/004
-/// Eq. 5–6), the flake density `|f|/σ²` deep inside (seeds/000 Eq. 13) — stay within 1e±216.
+/// derivative covariances `σ² w_i w_j` with `w_i = α_i²/(2σ²)` (seeds/000 Eq. 4,
+/// seeds/004 Eq. 5–6), the flake density `|f|/σ²` deep inside (seeds/000 Eq. 13) — stay within 1e±216.
 pub const SIGMA_RANGE: (f64, f64) = (1e-50, 1e50);
 
 /// `shell_extent` `k` of the medium (the shell's top at `kσ`). Above `f ≈ 38.6 σ` the flake

@@ -1,10 +1,10 @@
-//! The macrofacet medium: extinction (Eq. 14 / 31), analytic optical depth, transmittance and
+//! The macrofacet medium: extinction (seeds/000 Eq. 14 / 31), analytic optical depth, transmittance and
 //! free-flight sampling along a segment on which the signed distance varies linearly (a locally
 //! planar shell), and the phase function of [`crate::phase`].
 //!
 //! Free-flight routines take the *propagation* direction `d` in the local frame (normal = `+z`),
 //! the signed distance `f0` at the segment start, and a length `t` (may be `+∞`); along the
-//! segment `f(t) = f0 + t d_z`. With `σ(d) = projected_area(-d) = Λ(d) cos θ_d` (Eq. 31) the
+//! segment `f(t) = f0 + t d_z`. With `σ(d) = projected_area(-d) = Λ(d) cos θ_d` (seeds/000 Eq. 31) the
 //! optical depth is `τ = σ(d)/d_z [ln Φ(f1/σ) − ln Φ(f0/σ)]`, so the transmittance is
 //! `(Φ(f1/σ)/Φ(f0/σ))^{-Λ(d)}`; upward to infinity from height `h` that is Smith's
 //! `G1 = Φ(h/σ)^{Λ}` (seeds/002 Eq. 20).
@@ -40,7 +40,7 @@ impl MacrofacetMedium {
         self.phase.ndf.projected_area(-d)
     }
 
-    /// `σ_t(f, d) = ρ(f) σ(d)` (Eq. 14).
+    /// `σ_t(f, d) = ρ(f) σ(d)` (seeds/000 Eq. 14).
     pub fn sigma_t(&self, f: f64, d: DVec3) -> f64 {
         let s = self.sigma(d);
         if s == 0.0 {

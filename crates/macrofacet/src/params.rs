@@ -2,26 +2,9 @@
 //! in the C ABI (`mf_params_*`) and from Rust. Unknown names, wrong types, missing or
 //! contradictory parameters and out-of-range values are errors naming the parameter.
 //!
-//! | name | type | meaning (default) |
-//! |---|---|---|
-//! | `sigma` / `variance` | float | height standard deviation σ (scene units) or σ²; exactly one |
-//! | `shell_extent` | float | k: the shell's top face at `+kσ` (3) |
-//! | `distribution` | string | `beckmann`, `ggx`, `gtr` or `gpss` (`gpss`) |
-//! | `gamma` | float | `gtr` only, required: tail exponent in (0, 4]; 1 = Berry, 2 = GGX (seeds/001 Eq. 32) |
-//! | `lambda` | string | `gtr` only: `exact` (the projected area of `D`) or `dimov` (seeds/001 Eqs. 34–39) (`exact`) |
-//! | `stretch` | float | height fields: the stretch `s ∈ (−1, 1)` of seeds/001 Eq. 31 |
-//! | `transform_xx/_xy/_yx/_yy` | float | height fields: the tangent-plane matrix `M` of seeds/001 Eq. 9 (`a c; b d` = `xx xy; yx yy`), all four |
-//! | `alpha` | float | isotropic roughness; for `gpss` also `alpha_z` (an isotropic kernel) |
-//! | `alpha_u`, `alpha_v` | float | anisotropic roughness along the tangent / bitangent |
-//! | `alpha_z` | float | `gpss` only: roughness along the normal, `0` = height field |
-//! | `lengthscale`, `lengthscale_x/_y/_z` | float | kernel form: `alpha_i = √2 σ / l_i` (Eq. 4) |
-//! | `micro_bsdf` | string | `conductor` or `diffuse` (`conductor`) |
-//! | `material` | string | conductor preset (`Au`, `Ag`, `Cu`, `Al`, `Cr`) or `none` = mirror (`none`) |
-//! | `eta`, `k` | rgb | conductor index, instead of `material` |
-//! | `specular_reflectance` | rgb | scale of the conductor reflectance, in [0, 1] (1) |
-//! | `reflectance` | rgb | diffuse flake albedo, in [0, 1] (0.5) |
-//! | `vndf_sampling` | string | `exact` or `mixture` (conductor flakes: Eq. 40 for `gpss`, seeds/001 App. B for height fields) (`exact`) |
-//! | `mixture_ratio` | float | R of the mixture, in (0, 1) (0.5 for Eq. 40; `1 − α/2` within [0.5, 0.95] for App. B) |
+//! The names, their types, ranges and defaults are documented once: the table of README.md,
+//! section "Medium parameters". `scripts/check_params_doc.sh` (run by `scripts/test.sh`) fails when
+//! that table and the names read here differ.
 
 use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::fresnel::conductor_preset;
@@ -190,7 +173,7 @@ pub fn invalid_choice(name: &str, got: &str, choices: &str) -> Error {
     Error::new(ErrorKind::InvalidValue, format!("parameter \"{name}\" must be one of {choices}, got \"{got}\""))
 }
 
-/// Builds a macrofacet medium from named parameters (see the module table).
+/// Builds a macrofacet medium from named parameters (README.md "Medium parameters").
 pub fn medium_from_params(params: &ParamSet) -> Result<MacrofacetMedium> {
     let r = Reader::new(params);
 
@@ -314,8 +297,8 @@ fn read_ndf(r: &Reader, sigma: Option<f64>, default: &str) -> Result<(Ndf, f64)>
     Ok((Ndf::Ltmd(Ltmd::new(base, matrix)?), alpha_mean))
 }
 
-/// The microsurface transform: `stretch` (Eq. 31) or the four `transform_*` entries of `M`
-/// (Eq. 9), or none.
+/// The microsurface transform: `stretch` (seeds/001 Eq. 31) or the four `transform_*` entries of `M`
+/// (seeds/001 Eq. 9), or none.
 fn read_transform(r: &Reader) -> Result<Option<glam::DMat2>> {
     const NAMES: [&str; 4] = ["transform_xx", "transform_xy", "transform_yx", "transform_yy"];
     let stretch = r.float("stretch")?;
@@ -360,7 +343,7 @@ pub fn read_roughness(r: &Reader, sigma: f64, with_z: bool) -> Result<[f64; 3]> 
             "\"alpha_z\" / \"lengthscale_z\" apply to distribution \"gpss\" only"));
     }
     let names = if uses_kernel { kernel_names } else { alpha_names };
-    // Kernel form: alpha_i = √2 σ / l_i (Eq. 4); roughness form: as given.
+    // Kernel form: alpha_i = √2 σ / l_i (seeds/000 Eq. 4); roughness form: as given.
     // Checked here so that the message names the parameter as given (alpha_z may be 0).
     let to_alpha = |name: &str, v: f64| -> Result<f64> {
         if uses_kernel {

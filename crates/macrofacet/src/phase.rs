@@ -1,12 +1,12 @@
-//! The macrofacet phase function, Eq. 11–12 of seeds/000, with a choice of micro-BSDF on the
+//! The macrofacet phase function, seeds/000 Eq. 11–12, with a choice of micro-BSDF on the
 //! flakes.
 //!
-//! Direction convention (Mitsuba 3 / pbrt): `wi` and `wo` both point *away* from the scattering
-//! point. A ray travelling along `d` that scatters has `wi = -d`; the sampled `wo` is the new
-//! propagation direction. All vectors are in the local frame (normal = `+z`).
+//! Direction convention (Mitsuba 3's names): `wi` and `wo` both point *away* from the scattering
+//! point. A ray travelling along `d` that scatters has `wi = -d` (pbrt-v4 calls this vector `wo`);
+//! the sampled `wo` is the new propagation direction. All vectors are in the local frame (normal = `+z`).
 //!
 //! The flakes are one-sided (seeds/002 §4.1): `p(wi, wo) = F(wi·m) D_wi(m) / (4 |wi·m|)` with
-//! the half vector `m = (wi + wo)/|wi + wo|` and the visible normals `D_wi` of Eq. 12, so
+//! the half vector `m = (wi + wo)/|wi + wo|` and the visible normals `D_wi` of seeds/000 Eq. 12, so
 //! `p(wi, wo) = F D(m) / (4 σ(-wi))`. Reciprocity holds for the BRDF that emerges from a slab,
 //! not event by event.
 
@@ -75,7 +75,7 @@ impl MicroBsdf {
 pub enum VndfSampling {
     /// The distribution's exact sampler (all three NDFs have one).
     Exact,
-    /// The Beckmann + uniform-hemisphere mixture of Eq. 40 (generalized NDF, specular flakes).
+    /// The Beckmann + uniform-hemisphere mixture of seeds/000 Eq. 40 (generalized NDF, specular flakes).
     Mixture(BeckmannUniformMixture),
     /// `D(m)(m·n)` + uniform-hemisphere mixture of seeds/001 Appendix B (height fields).
     NormalMixture(NormalUniformMixture),
@@ -105,7 +105,7 @@ pub fn reflect(wi: DVec3, m: DVec3) -> DVec3 {
 }
 
 impl MacrofacetPhase {
-    /// `p(wi, wo)` per channel (includes the flake albedo: `sigma_s = sigma_t`, Eq. 6).
+    /// `p(wi, wo)` per channel (includes the flake albedo: `sigma_s = sigma_t`, seeds/000 Eq. 6).
     pub fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
         match self.micro_bsdf {
             MicroBsdf::Diffuse { reflectance } => {
@@ -140,7 +140,7 @@ impl MacrofacetPhase {
             _ => {
                 let Some((m, cos)) = half_vector(wi, wo) else { return 0.0 };
                 match self.sampling {
-                    // D_wi(m) / (4 wi·m) (Eq. 12 and the reflection's Jacobian) with wi·m
+                    // D_wi(m) / (4 wi·m) (seeds/000 Eq. 12 and the reflection's Jacobian) with wi·m
                     // cancelled: forming wi·m D(m) first underflows for grazing m, where the
                     // result is an ordinary number (found by fuzzing: eval/pdf off by 1e-3).
                     // The area is the one the sampler normalises by (it differs from the
@@ -194,7 +194,7 @@ impl MacrofacetPhase {
     /// flakes exactly the albedo, for exact sampling exactly the flake's Fresnel reflectance).
     /// `None` when that density is below the smallest normal `f64` (then it and `eval` have lost
     /// their precision, and `eval / pdf` is noise; such directions have a total probability below
-    /// `4π · 2.2e-308`) or overflows (the Eq. 40 mixture's density diverges like `1/(wi·m)` as `wo`
+    /// `4π · 2.2e-308`) or overflows (the seeds/000 Eq. 40 mixture's density diverges like `1/(wi·m)` as `wo`
     /// turns back onto `-wi`; its weight `eval/pdf` is 0 there, so no estimate changes).
     ///
     /// Everything is evaluated at `wo`, not at the normal it was sampled with: the half vector

@@ -3,7 +3,7 @@
 //!
 //! Macrofacet theory turns a Gaussian-process surface into an exponential medium whose flake
 //! density along the signed distance `f` is the inverse Mills ratio
-//! `ρ(f) = φ(f)/Φ(f)` (Eq. 13 of the macrofacet paper, with `f` in units of `σ`):
+//! `ρ(f) = φ(f)/Φ(f)` (seeds/000 Eq. 13 of the macrofacet paper, with `f` in units of `σ`):
 //!
 //! - [`normal_pdf_over_cdf`] evaluates `ρ` itself. Deep inside the surface (`f → −∞`) both `φ`
 //!   and `Φ` underflow while `ρ(f) ≈ −f` stays perfectly ordinary, so it is built on [`erfcx`].
@@ -192,7 +192,7 @@ pub fn ln_normal_cdf(x: f64) -> f64 {
     }
 }
 
-/// Inverse Mills ratio `φ(x)/Φ(x)` — the macrofacet flake density `ρ` (Eq. 13), all `x`.
+/// Inverse Mills ratio `φ(x)/Φ(x)` — the macrofacet flake density `ρ` (seeds/000 Eq. 13), all `x`.
 ///
 /// `x < 0`: `√(2/π)/erfcx(−x/√2)`, which behaves like `−x` as `x → −∞` and never forms
 /// `0/0`; `x ≥ 0`: `φ(x)/Φ(x)` directly (`Φ ≥ ½`). Relative error measured ≲ 1e-15 for

@@ -429,7 +429,7 @@ fn fuzz_fresnel_reflectance_stays_in_the_unit_interval() {
         }
     }
     assert!(fresnel_conductor(0.3, 1.0, 0.0) < 1e-30, "eta = 1: no interface");
-    // The fuzz case: gpss height field with Eq. 40 sampling, eta = (1, 1, 0.01), k = (0, 10.2, 1e-3).
+    // The fuzz case: gpss height field with seeds/000 Eq. 40 sampling, eta = (1, 1, 0.01), k = (0, 10.2, 1e-3).
     let mut params = ParamSet::new();
     params.set_float("variance", 3.874675120456049e10).set_float("shell_extent", 0.3495).set_float("alpha_u", 4.318).set_float("alpha_v", 4.318);
     params.set_float("alpha_z", 0.0).set_rgb("eta", [1.0, 1.0, 0.01]).set_rgb("k", [0.0, 10.2, 1.0256e-3]);

@@ -4,9 +4,9 @@
 //! a generalized macrofacet with `alpha_x = alpha_y = alpha_z = α → ∞` has an isotropic NDF (the
 //! gradient's mean `e_z` becomes negligible) and a direction-independent projected area (relative
 //! anisotropy `O(1/α)`, 1e-4 at α = 1e4). A semi-infinite slab of such flakes with albedo `a` must
-//! reproduce Chandrasekhar's results: single scattering Eq. 25,
-//! `f1 = a / (4π (μi + μo))`, and all orders Eq. 30, `fr = a H(μi) H(μo) / (4π (μi + μo))`, with
-//! the H-function of Eq. 31, `H(μ) = exp(-(μ/π) ∫_0^{π/2} ln(1 - a t cot t) / (cos² t + μ² sin² t) dt)`.
+//! reproduce Chandrasekhar's results: single scattering seeds/002 Eq. 25,
+//! `f1 = a / (4π (μi + μo))`, and all orders seeds/002 Eq. 30, `fr = a H(μi) H(μo) / (4π (μi + μo))`, with
+//! the H-function of seeds/002 Eq. 31, `H(μ) = exp(-(μ/π) ∫_0^{π/2} ln(1 - a t cot t) / (cos² t + μ² sin² t) dt)`.
 
 use macrofacet_validation::common;
 
@@ -35,7 +35,7 @@ fn isotropic_slab(albedo: f64) -> MacrofacetMedium {
 #[test]
 fn h_function_matches_published_values() {
     // Conservative case a = 1 (log singularity at t = 0): H(1) = 2.9078 as tabulated by
-    // Chandrasekhar (1960); H(0.5) = 2.012779 and H(1) = 2.907811 from Eq. 31 evaluated with
+    // Chandrasekhar (1960); H(0.5) = 2.012779 and H(1) = 2.907811 from seeds/002 Eq. 31 evaluated with
     // mpmath at 60 digits.
     assert!((h_function(0.5, 1.0) - 2.012779).abs() < 1e-4, "H(0.5) = {}", h_function(0.5, 1.0));
     assert!((h_function(1.0, 1.0) - 2.907811).abs() < 1e-4, "H(1) = {}", h_function(1.0, 1.0));
@@ -66,10 +66,10 @@ fn check(orders: u32, formula: impl Fn(f64, f64) -> f64, label: &str) {
 
 #[test]
 fn single_scattering_matches_chandrasekhar_eq25() {
-    check(1, |mi, mo| 0.8 / (4.0 * PI * (mi + mo)), "Eq. 25");
+    check(1, |mi, mo| 0.8 / (4.0 * PI * (mi + mo)), "seeds/002 Eq. 25");
 }
 
 #[test]
 fn all_orders_match_chandrasekhar_eq30() {
-    check(10_000, |mi, mo| 0.8 * h_function(mi, 0.8) * h_function(mo, 0.8) / (4.0 * PI * (mi + mo)), "Eq. 30");
+    check(10_000, |mi, mo| 0.8 * h_function(mi, 0.8) * h_function(mo, 0.8) / (4.0 * PI * (mi + mo)), "seeds/002 Eq. 30");
 }

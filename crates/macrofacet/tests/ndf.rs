@@ -1,4 +1,4 @@
-//! Validation target 1 (design notes): NDF normalisation, Eq. 39, the projected-area identity and
+//! Validation target 1 (design notes): NDF normalisation, seeds/000 Eq. 39, the projected-area identity and
 //! the Beckmann limit, for every distribution, on the whole sphere.
 
 use macrofacet_validation::common;
@@ -110,7 +110,7 @@ fn gpss_tends_to_beckmann_as_alpha_z_vanishes() {
                 error = error.max((ga - ba).abs() / ba.abs().max(1e-3));
             }
         }
-        // The difference is O(alpha_z²) (Eq. 38's exponent is -ρ/(m_z² + ρ α_z²)): a decade in
+        // The difference is O(alpha_z²) (seeds/000 Eq. 38's exponent is -ρ/(m_z² + ρ α_z²)): a decade in
         // alpha_z must buy about two decades of error.
         assert!(error * 50.0 < previous_error, "alpha_z = {az}: error {error} vs {previous_error} one decade before");
         previous_error = error;
@@ -120,7 +120,7 @@ fn gpss_tends_to_beckmann_as_alpha_z_vanishes() {
 
 #[test]
 fn lambda_matches_eq32_closed_form() {
-    // Eq. 32 written out directly, away from the cancellation-prone tails.
+    // seeds/000 Eq. 32 written out directly, away from the cancellation-prone tails.
     let (ax, ay, az) = (0.5, 0.3, 0.8);
     let gpss = Gpss::new(ax, ay, az).unwrap();
     for w in directions().into_iter().filter(|w| w.z.abs() > 0.05) {
@@ -150,13 +150,13 @@ fn eq38_matches_the_gradient_integral_eq36() {
             }
         }
         let d = gpss.d(m);
-        assert!((d - integral).abs() < 1e-9 * (1.0 + d), "m = {m}: Eq. 38 {d}, Eq. 36 {integral}");
+        assert!((d - integral).abs() < 1e-9 * (1.0 + d), "m = {m}: seeds/000 Eq. 38 {d}, seeds/000 Eq. 36 {integral}");
     }
 }
 
 #[test]
 fn full_anisotropy_with_a_frame_aligned_q_is_the_gpss_ndf() {
-    // Q = diag(α²): the matrix form must reproduce seeds/000 Eq. 38 and Eq. 32 to rounding, and
+    // Q = diag(α²): the matrix form must reproduce seeds/000 Eq. 38 and seeds/000 Eq. 32 to rounding, and
     // draw the same visible normals from the same numbers.
     let mut rng = macrofacet::rng::Pcg32::new(5, 5);
     for &(ax, ay, az) in &[(0.3, 0.7, 0.2), (1.0, 1.0, 1.0), (2.0, 0.5, 10.0), (0.1, 0.1, 1e-3)] {
@@ -250,7 +250,7 @@ fn gtr_is_normalised_over_the_gamma_alpha_grid() {
     for (gamma, alpha) in gtr_grid() {
         let gtr = Gtr::new(alpha, gamma, GtrLambda::Exact).unwrap();
         let d = |mu: f64| gtr.d(DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu));
-        // ∫ D (m·n) dm = 2π ∫ D(μ) μ dμ (Eq. 3 of seeds/001).
+        // ∫ D (m·n) dm = 2π ∫ D(μ) μ dμ (seeds/001 Eq. 3).
         let integral = isotropic_projected_area(&d, 0.0);
         assert!((integral - 1.0).abs() < 1e-10, "gtr(α={alpha}, γ={gamma}): ∫ D cos = {integral}");
     }
@@ -292,7 +292,7 @@ fn gtr_at_gamma_2_is_ggx_and_the_berry_limit_is_continuous() {
                 assert!((a - b).abs() <= 1e-12 * b.max(1e-300), "α={alpha} area at {w}: {a} vs GGX {b}");
             }
         }
-        // γ = 1 ± ε: the 0/0 of Eq. 32 resolves to Eq. 33 continuously.
+        // γ = 1 ± ε: the 0/0 of seeds/001 Eq. 32 resolves to seeds/001 Eq. 33 continuously.
         let berry = Gtr::new(alpha, 1.0, GtrLambda::Exact).unwrap();
         for eps in [1e-6, 1e-9, 1e-13] {
             for gamma in [1.0 - eps, 1.0 + eps] {
@@ -303,18 +303,18 @@ fn gtr_at_gamma_2_is_ggx_and_the_berry_limit_is_continuous() {
                 }
             }
         }
-        // Eq. 33 written out.
+        // seeds/001 Eq. 33 written out.
         if alpha != 1.0 {
             let m = spherical(0.3, 0.0);
             let eq33 = (alpha * alpha - 1.0) / (std::f64::consts::PI * (alpha * alpha).ln()) / (1.0 + (alpha * alpha - 1.0) * m.z * m.z);
-            assert!((berry.d(m) - eq33).abs() < 1e-13 * eq33, "Eq. 33 at α={alpha}");
+            assert!((berry.d(m) - eq33).abs() < 1e-13 * eq33, "seeds/001 Eq. 33 at α={alpha}");
         }
     }
 }
 
 #[test]
 fn dimov_lambda_is_exact_at_integer_gamma_and_close_between() {
-    // Eqs. 35–39 are exact at γ ∈ {1, 2, 3, 4} (γ = 0 is the uniform D, α-independent).
+    // seeds/001 Eqs. 35–39 are exact at γ ∈ {1, 2, 3, 4} (γ = 0 is the uniform D, α-independent).
     let mut report = Vec::new();
     for &alpha in &[0.05, 0.3, 0.8, 1.5] {
         for &gamma in &[1.0, 2.0, 3.0, 4.0, 0.5, 1.5, 2.5, 3.5] {
@@ -380,8 +380,8 @@ fn transformed() -> Vec<(String, Ndf)> {
         ("gtr3", LtmdBase::Gtr(Gtr::new(0.5, 3.0, GtrLambda::Exact).unwrap())),
     ];
     for (name, base) in bases {
-        // Fig. 1's skew (a, b, c, d) = (1, 0, 2, 1) of Eq. 9, a general matrix with a
-        // reflection (det < 0), and the stretch s = 0.3 of Eq. 31.
+        // Fig. 1's skew (a, b, c, d) = (1, 0, 2, 1) of seeds/001 Eq. 9, a general matrix with a
+        // reflection (det < 0), and the stretch s = 0.3 of seeds/001 Eq. 31.
         let skew = glam::DMat2::from_cols(glam::DVec2::new(1.0, 0.0), glam::DVec2::new(2.0, 1.0));
         let general = glam::DMat2::from_cols(glam::DVec2::new(0.7, -0.4), glam::DVec2::new(0.9, 1.3));
         v.push((format!("{name}-skew"), Ndf::Ltmd(Ltmd::new(base, skew).unwrap())));
@@ -403,7 +403,7 @@ fn transformed_distributions_are_normalised_and_their_lambda_is_their_projected_
             let closed = ndf.projected_area(w);
             // The kink of <w, m> across the equator jump of a transformed GGX converges as
             // O(h²) (3.3e-5, 5.5e-6, 1.9e-6 at 48, 96, 192 panels in the worst case here).
-            assert!((integral - closed).abs() < TOL + 5e-4 * closed, "{name}, w = {w}: quadrature {integral}, Eq. 12 {closed}");
+            assert!((integral - closed).abs() < TOL + 5e-4 * closed, "{name}, w = {w}: quadrature {integral}, seeds/001 Eq. 12 {closed}");
             if w.z.abs() > 1e-3 {
                 assert!((ndf.lambda(w) + ndf.lambda(-w) + 1.0).abs() < 1e-9, "{name}, w = {w}");
             }

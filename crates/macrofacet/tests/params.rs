@@ -109,7 +109,7 @@ fn gtr_and_microsurface_transforms_by_name() {
     let m = medium_from_params(&params(&[("sigma", "0.1"), ("distribution", "gtr"), ("alpha", "0.3"), ("gamma", "1.7")])).unwrap();
     let Ndf::Gtr(g) = m.phase.ndf else { panic!("isotropic gtr is Ndf::Gtr") };
     assert_eq!((g.alpha, g.gamma, g.lambda), (0.3, 1.7, GtrLambda::Exact));
-    // Anisotropic GTR: the isotropic GTR of sqrt(α_u α_v) under diag(α/α_u, α/α_v) (Eq. 29).
+    // Anisotropic GTR: the isotropic GTR of sqrt(α_u α_v) under diag(α/α_u, α/α_v) (seeds/001 Eq. 29).
     let m = medium_from_params(&params(&[("sigma", "0.1"), ("distribution", "gtr"), ("alpha_u", "0.2"), ("alpha_v", "0.8"),
         ("gamma", "2.5"), ("lambda", "dimov")])).unwrap();
     let Ndf::Ltmd(l) = m.phase.ndf else { panic!("anisotropic gtr is a transform") };

@@ -41,7 +41,7 @@ fn phase_integral_over_half_vectors(phase: &MacrofacetPhase, wi: DVec3) -> f64 {
     sphere_integral(|m| if wi.dot(m) > 0.0 { phase.eval(wi, reflect(wi, m))[0] * 4.0 * wi.dot(m) } else { 0.0 }, 48, 32)
 }
 
-/// Fig. 1's skew of seeds/001: (a, b, c, d) = (1, 0, 2, 1) in Eq. 9.
+/// Fig. 1's skew of seeds/001: (a, b, c, d) = (1, 0, 2, 1) in seeds/001 Eq. 9.
 fn skew(base: LtmdBase) -> Ltmd {
     Ltmd::new(base, glam::DMat2::from_cols(glam::DVec2::new(1.0, 0.0), glam::DVec2::new(2.0, 1.0))).unwrap()
 }

@@ -76,8 +76,8 @@ pub fn run(ctx: &Ctx) -> Section {
          macrofacet with α_x = α_y = α_z = {ALPHA:.0e} has an isotropic NDF (the gradient's mean e_z is negligible) and a \
          direction-independent projected area (relative anisotropy O(1/α)). A semi-infinite slab of such flakes with \
          reflectance a (`material = none`, `specular_reflectance = a`; σ = 1, top at +8σ) is the classic \
-         semi-infinite isotropic medium. Chandrasekhar: single scattering (Eq. 25) `f₁ = a / (4π (μi + μo))`, all \
-         orders (Eq. 30) `f_r = a H(μi) H(μo) / (4π (μi + μo))`, with H from Eq. 31 (16-point Gauss–Legendre on 40 panels halving toward t = 0; \
+         semi-infinite isotropic medium. Chandrasekhar: single scattering (seeds/002 Eq. 25) `f₁ = a / (4π (μi + μo))`, all \
+         orders (seeds/002 Eq. 30) `f_r = a H(μi) H(μo) / (4π (μi + μo))`, with H from seeds/002 Eq. 31 (16-point Gauss–Legendre on 40 panels halving toward t = 0; \
          checked below against the moment identity ∫₀¹ H dμ = 2(1 − √(1−a))/a).\n\n\
          - Estimator: next-event estimation along `slab::walk_from` (the estimator of `slab::reflected_density`, for \
          all wo at once): every event adds `weight · p(wi_event, wo) · T(f → top along wo) / μo`; the first event \
@@ -192,12 +192,12 @@ pub fn run(ctx: &Ctx) -> Section {
     let _ = writeln!(
         md,
         "![Chandrasekhar]({file})\n\n*Figure 4: isotropic mirror-flake slab vs Chandrasekhar, columns a = 0.5, 0.9, 0.99. \
-         Top: BRDF vs θo; solid = all orders (Eq. 30), dashed = single scattering (Eq. 25), dots = macrofacet slab \
+         Top: BRDF vs θo; solid = all orders (seeds/002 Eq. 30), dashed = single scattering (seeds/002 Eq. 25), dots = macrofacet slab \
          (large values: all orders, small: single scattering); blue θi = 0°, orange θi = 60°. Bottom: relative error of \
          the slab with ±2 SE bars (large dots: all orders, small dots: single scattering; shifted sideways for \
          legibility). The errors at different θo are correlated: the same walks serve every θo.*\n\n{}\nWorst relative differences (MC − exact)/exact over θo, with the z-score. \"events\" = mean \
          scattering events per path. Raw data: [`{csv_path}`]({csv_path}).\n",
-        md_table(&["a", "θi", "N", "events", "all orders vs Eq. 30", "single vs Eq. 25", "within expectation"], &rows)
+        md_table(&["a", "θi", "N", "events", "all orders vs seeds/002 Eq. 30", "single vs seeds/002 Eq. 25", "within expectation"], &rows)
     );
     let summary = vec![(
         "4. Isotropic limit vs Chandrasekhar (a = 0.5, 0.9, 0.99)".to_string(),

@@ -381,7 +381,7 @@ pub fn run(ctx: &Ctx) -> Section {
                 format!(
                     "and the library's transmittance equals Smith's closed form to {smith_worst:.0e}. So the library implements \
                      the model correctly; what the realizations measure is the error of the model itself, Smith's \
-                     uncorrelated-occluder assumption behind the macrofacet extinction (Eq. 14): worst brute force − \
+                     uncorrelated-occluder assumption behind the macrofacet extinction (seeds/000 Eq. 14): worst brute force − \
                      macrofacet difference {}. It grows toward grazing incidence (per σ of descent the ray crosses tan θ · σ of \
                      surface: 0.7 correlation lengths at 45°, 1.9 at 70°), while the paper's Fig. 7 and the test suite's \
                      0.015 tolerance were set at 45°. A \

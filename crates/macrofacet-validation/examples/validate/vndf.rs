@@ -158,7 +158,7 @@ pub fn run(ctx: &Ctx) -> Section {
          travel down at incidence θ. The **reference** normals are those of the first entering zero crossing \
          of each GP realization, `gpis::visible_normals` (the normal `∇f/|∇f|` drawn from its conditional law \
          at the crossing, seeds/004 Sec. 3.2). The **model** is `pdf_visible(wi, m) = <wi, m> D(m) / σ(wi)` \
-         (Eq. 12) of the Beckmann NDF (height field) or the generalized NDF of Eq. 38 (isotropic kernel), \
+         (seeds/000 Eq. 12) of the Beckmann NDF (height field) or the generalized NDF of seeds/000 Eq. 38 (isotropic kernel), \
          whose normals cover the whole sphere.\n\n\
          - Rays: N = {n} per (kernel, angle), in {chunks} chunks seeded `Pcg32::new({SEED} + 100·kernel + angle index, chunk)`.\n\
          - Histograms: cos θ_m in {MU_BINS} bins on [−1, 1]; azimuth φ of m relative to the incident azimuth \

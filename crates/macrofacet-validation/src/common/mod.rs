@@ -57,7 +57,7 @@ pub fn spherical(theta: f64, phi: f64) -> DVec3 {
 /// `m_z = 0`, which is a bin edge there (Beckmann and the generalized NDF are smooth at `m_z = 0`).
 pub fn chi2_frame(ndf: &macrofacet::ndf::Ndf, wi: DVec3) -> macrofacet::frame::Frame {
     match ndf {
-        // GTR (D(horizon) = c of Eq. 32) and transformed GGX/GTR jump there too.
+        // GTR (D(horizon) = c of seeds/001 Eq. 32) and transformed GGX/GTR jump there too.
         macrofacet::ndf::Ndf::Ggx(_) | macrofacet::ndf::Ndf::Gtr(_) | macrofacet::ndf::Ndf::Ltmd(_) => macrofacet::frame::Frame::identity(),
         _ => macrofacet::frame::Frame::from_normal_tangent(wi, DVec3::X).unwrap(),
     }

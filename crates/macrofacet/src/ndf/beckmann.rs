@@ -15,7 +15,8 @@ pub struct Beckmann {
 }
 
 impl Beckmann {
-    /// `alpha_u` along the local tangent `x`, `alpha_v` along `y`; both within
+    /// `alpha_u` along the local tangent `x`, `alpha_v` along `y` (the `alpha_x`, `alpha_y` of
+    /// [`super::Gpss`], which follows the paper's kernel axes); both within
     /// [`crate::limits::ROUGHNESS_RANGE`].
     pub fn new(alpha_u: f64, alpha_v: f64) -> Result<Beckmann> {
         Ok(Beckmann { alpha_u: check_roughness("parameter \"alpha_u\"", alpha_u)?, alpha_v: check_roughness("parameter \"alpha_v\"", alpha_v)? })
@@ -42,7 +43,7 @@ impl MicrofacetDistribution for Beckmann {
         (-e - 4.0 * m.z.ln()).exp() / (PI * self.alpha_u * self.alpha_v)
     }
 
-    /// Eq. 32 with `alpha_z = 0`: the Beckmann projected area `(1 + Λ(w)) cos θ_w`.
+    /// seeds/000 Eq. 32 with `alpha_z = 0`: the Beckmann projected area `(1 + Λ(w)) cos θ_w`.
     fn projected_area(&self, w: DVec3) -> f64 {
         self.gradient().projected_area(w)
     }

@@ -1,5 +1,5 @@
 //! Gradients `g ~ N((0,0,1), diag(alpha_x², alpha_y², alpha_z²) / 2)`: the gradient of a GPSS at a
-//! zero crossing (Eq. 37, with `sigma²/l² = alpha²/2` from Eq. 4). Beckmann is the `alpha_z = 0`
+//! zero crossing (seeds/000 Eq. 37, with `sigma²/l² = alpha²/2` from seeds/000 Eq. 4). Beckmann is the `alpha_z = 0`
 //! case (slopes are Gaussian), the generalized macrofacet the `alpha_z > 0` case.
 //!
 //! Both the projected area and exact visible-normal sampling follow from the gradient-space
@@ -8,7 +8,7 @@
 //! `g` drawn from `N(mu, Sigma) · max(0, w·g)`. Whitening `g = mu + L z` with `L = Sigma^(1/2)`
 //! reduces that density to a 1-D density `∝ (x + c)_+ φ(x)` along `L w` times an independent
 //! standard normal in the orthogonal plane. This is exact importance sampling of the generalized
-//! vNDF, which seeds/000 leaves as future work (it uses the mixture of Eq. 40).
+//! vNDF, which seeds/000 leaves as future work (it uses the mixture of seeds/000 Eq. 40).
 
 use crate::special::{erfc, erfcx, normal_cdf, normal_pdf};
 use glam::{DMat3, DVec3};
@@ -66,7 +66,7 @@ impl GaussianGradient {
         }
     }
 
-    /// `E[max(0, w·g)] = s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (Eq. 32's `a`). Written
+    /// `E[max(0, w·g)] = s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (seeds/000 Eq. 32's `a`). Written
     /// with `erfcx` for `a < 0` so that grazing-from-below directions do not cancel.
     pub fn projected_area(&self, w: DVec3) -> f64 {
         let s = self.s(w);

@@ -1,7 +1,11 @@
 //! The generalized macrofacet (seeds/000 Sec. 4.2): the full-sphere NDF of a GPSS whose
 //! squared-exponential kernel has finite correlation length along the normal as well,
-//! `alpha_i = sqrt(2) sigma / l_i` (Eq. 4). Normals point in every direction; `alpha_z -> 0`
+//! `alpha_i = sqrt(2) sigma / l_i` (seeds/000 Eq. 4). Normals point in every direction; `alpha_z -> 0`
 //! recovers Beckmann.
+//!
+//! Naming: the fields follow the paper's kernel axes (`α_x, α_y, α_z` for `l_x, l_y, l_z`). The
+//! in-plane pair is what [`Beckmann`] and the parameter table call `alpha_u`, `alpha_v` (along the
+//! local tangent `x` and bitangent `y`): `alpha_x` = `alpha_u`, `alpha_y` = `alpha_v`.
 
 use super::beckmann::Beckmann;
 use super::gaussian_gradient::GaussianGradient;
@@ -14,7 +18,9 @@ use std::f64::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gpss {
+    /// Roughness along the local tangent `x`: the parameter `alpha_u`.
     pub alpha_x: f64,
+    /// Roughness along the local bitangent `y`: the parameter `alpha_v`.
     pub alpha_y: f64,
     /// `0` is allowed and means a height field: the NDF is then exactly Beckmann.
     pub alpha_z: f64,
@@ -25,8 +31,8 @@ impl Gpss {
     /// `[ALPHA_Z_MIN, ROUGHNESS_RANGE.1]`.
     pub fn new(alpha_x: f64, alpha_y: f64, alpha_z: f64) -> Result<Gpss> {
         Ok(Gpss {
-            alpha_x: check_roughness("parameter \"alpha_u\"", alpha_x)?,
-            alpha_y: check_roughness("parameter \"alpha_v\"", alpha_y)?,
+            alpha_x: check_roughness("alpha_x (parameter \"alpha_u\")", alpha_x)?,
+            alpha_y: check_roughness("alpha_y (parameter \"alpha_v\")", alpha_y)?,
             alpha_z: check_alpha_z("parameter \"alpha_z\"", alpha_z)?,
         })
     }
@@ -35,16 +41,16 @@ impl Gpss {
         GaussianGradient::diagonal(DVec3::new(self.alpha_x, self.alpha_y, self.alpha_z))
     }
 
-    /// The height-field limit with the same in-plane roughness (used by the Eq. 40 mixture).
+    /// The height-field limit with the same in-plane roughness (used by the seeds/000 Eq. 40 mixture).
     pub fn beckmann(&self) -> Beckmann {
         Beckmann { alpha_u: self.alpha_x, alpha_v: self.alpha_y }
     }
 }
 
 impl MicrofacetDistribution for Gpss {
-    /// Eq. 38, `D(m) = ∫_0^∞ P(t m) t³ dt` (Eq. 36) for `g ~ N(e_z, diag(α²)/2)`:
+    /// seeds/000 Eq. 38, `D(m) = ∫_0^∞ P(t m) t³ dt` (seeds/000 Eq. 36) for `g ~ N(e_z, diag(α²)/2)`:
     /// `D = e^{-C} / (π^{3/2} α_x α_y α_z A²) [ (β² + 1)/2 + (√π/2) β (β² + 3/2) erfcx(-β) ]`
-    /// with `A, B, C` of Eq. 38 and `β = B/√A`. That is Eq. 38 regrouped: `e^{-C + B²/A}` times
+    /// with `A, B, C` of seeds/000 Eq. 38 and `β = B/√A`. That is seeds/000 Eq. 38 regrouped: `e^{-C + B²/A}` times
     /// `erfc(-β)` is `e^{-C} erfcx(-β)`. For `β >= 0` the product is formed as
     /// `e^{E} erfc(-β)` with `E = B²/A − C = −ρ/(m_z² + ρ α_z²)`, `ρ = m_x²/α_x² + m_y²/α_y²`,
     /// which neither overflows nor cancels as `α_z -> 0`.
@@ -69,7 +75,7 @@ impl MicrofacetDistribution for Gpss {
         (prefactor * bracket).max(0.0)
     }
 
-    /// `σ(-w) = Λ(-w) cos θ` with Λ of Eq. 32, in the cancellation-free form of
+    /// `σ(-w) = Λ(-w) cos θ` with Λ of seeds/000 Eq. 32, in the cancellation-free form of
     /// [`GaussianGradient::projected_area`].
     fn projected_area(&self, w: DVec3) -> f64 {
         self.gradient().projected_area(w)

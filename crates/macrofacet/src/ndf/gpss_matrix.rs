@@ -4,7 +4,7 @@
 //! frame-aligned `Σ = diag(l²)` gives `Q = diag(α²)`, seeds/000 Eq. 4). `Q` couples the normal
 //! and the tangents when `Σ`'s axes are not those of the mean surface.
 //!
-//! `D(m) = ∫_0^∞ P(t m) t³ dt` (seeds/000 Eq. 36) has the closed form of Eq. 38 with the quadratic
+//! `D(m) = ∫_0^∞ P(t m) t³ dt` (seeds/000 Eq. 36) has the closed form of seeds/000 Eq. 38 with the quadratic
 //! forms of `Q⁻¹` in place of the diagonal ones; the projected area and the exact visible-normal
 //! sampler are those of [`GaussianGradient`] with the spread `K/√2`, `K Kᵀ = Q`.
 
@@ -88,7 +88,7 @@ impl GpssMatrix {
 
 impl MicrofacetDistribution for GpssMatrix {
     /// seeds/000 Eq. 38 with `Q⁻¹`: with `a = mᵀ adj(Q) m`, `b = mᵀ adj(Q) e_z`,
-    /// `c = adj(Q)_zz` (Eq. 38's `A, B, C` times `det Q`), `β = b / sqrt(det(Q) a)`,
+    /// `c = adj(Q)_zz` (seeds/000 Eq. 38's `A, B, C` times `det Q`), `β = b / sqrt(det(Q) a)`,
     /// `D = det(Q)^{3/2} e^{-c/det Q} / (π^{3/2} a²) [(β² + 1)/2 + (√π/2) β (β² + 3/2) erfcx(-β)]`.
     /// For `β >= 0` the `erfc` term carries `e^{E}` with `E = −wᵀ Q w / a`, `w = e_z × m`
     /// (Cauchy–Schwarz in the `Q⁻¹` metric: `ac − b² = det(Q) wᵀ Q w`), which neither overflows nor

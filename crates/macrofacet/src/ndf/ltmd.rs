@@ -1,18 +1,18 @@
 //! Linearly transformed microfacet distributions (seeds/001 §4): a height-field microsurface
-//! transformed in the tangent plane by `M = [[a, c], [b, d]]` (Eq. 9; `M` maps the
+//! transformed in the tangent plane by `M = [[a, c], [b, d]]` (seeds/001 Eq. 9; `M` maps the
 //! microsurface's tangent coordinates, `x` along the host's tangent). Normals transform with
 //! `M^{−T}`, directions with `M`.
 //!
-//! - `D_M(m) = |det M| / |M^T m|⁴ · D(M^T m / |M^T m|)` (Eq. 22), normalised for every `M`.
-//! - `G1_M(v, m) = G1(M^{−1} v/|M^{−1} v|, M^T m/|M^T m|)` (Eq. 12), so Smith's Λ is
+//! - `D_M(m) = |det M| / |M^T m|⁴ · D(M^T m / |M^T m|)` (seeds/001 Eq. 22), normalised for every `M`.
+//! - `G1_M(v, m) = G1(M^{−1} v/|M^{−1} v|, M^T m/|M^T m|)` (seeds/001 Eq. 12), so Smith's Λ is
 //!   `Λ_M(v) = Λ(M^{−1} v/|·|)` and the projected area, homogeneous of degree 1 in its
 //!   argument, is `A_M(v) = A(M^{−1} v)`.
-//! - Visible normals (Eq. 28): `w = M^{−1} v/|·|`, a visible normal `u` of the base seen from
+//! - Visible normals (seeds/001 Eq. 28): `w = M^{−1} v/|·|`, a visible normal `u` of the base seen from
 //!   `w`, then `m = M^{−T} u/|·|`. Exact whenever the base sampler is; the same holds for
-//!   `D(m)(m·n)` (Eqs. 25–26).
+//!   `D(m)(m·n)` (seeds/001 Eqs. 25–26).
 //!
-//! `M = diag(α/α_x, α/α_y)` turns an isotropic shape-invariant base of roughness `α` into the
-//! classic anisotropic one (Eq. 29); [`Ltmd::stretch`] is the area-preserving `M_s` of Eq. 31.
+//! `M = diag(α/α_u, α/α_v)` turns an isotropic shape-invariant base of roughness `α` into the
+//! classic anisotropic one (seeds/001 Eq. 29); [`Ltmd::stretch`] is the area-preserving `M_s` of seeds/001 Eq. 31.
 //! `M` is a plain value: a per-query matrix (e.g. from a tension map, §5.1) is just another
 //! `Ltmd`.
 
@@ -83,7 +83,7 @@ impl LtmdBase {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ltmd {
     pub base: LtmdBase,
-    /// `M` of Eq. 9 (its 2×2 tangent block; the `z` row and column are the identity).
+    /// `M` of seeds/001 Eq. 9 (its 2×2 tangent block; the `z` row and column are the identity).
     pub transform: DMat2,
     inverse: DMat2,
     abs_det: f64,
@@ -109,13 +109,13 @@ impl Ltmd {
         Ok(Ltmd { base, transform, inverse: transform.inverse(), abs_det: det.abs() })
     }
 
-    /// The stretch `M_s` of Eq. 31, `s ∈ (−1, 1)`: `diag(1/(1 − s), 1 − s)` for `s >= 0`,
+    /// The stretch `M_s` of seeds/001 Eq. 31, `s ∈ (−1, 1)`: `diag(1/(1 − s), 1 − s)` for `s >= 0`,
     /// `diag(1 + s, 1/(1 + s))` below; `det M_s = 1`.
     pub fn stretch(base: LtmdBase, s: f64) -> Result<Ltmd> {
         Ltmd::new(base, Ltmd::stretch_matrix(s)?)
     }
 
-    /// `M_s` of Eq. 31.
+    /// `M_s` of seeds/001 Eq. 31.
     pub fn stretch_matrix(s: f64) -> Result<DMat2> {
         if !(s > -1.0 && s < 1.0) {
             return Err(Error::new(ErrorKind::InvalidValue, format!("parameter \"stretch\" must lie in (-1, 1), got {s}")));
@@ -124,7 +124,7 @@ impl Ltmd {
         Ok(DMat2::from_diagonal(diag))
     }
 
-    /// Classic anisotropy from an isotropic base of roughness `alpha` (Eq. 29):
+    /// Classic anisotropy from an isotropic base of roughness `alpha` (seeds/001 Eq. 29):
     /// `M = diag(α/α_u, α/α_v)`.
     pub fn anisotropic(base: LtmdBase, alpha: f64, alpha_u: f64, alpha_v: f64) -> Result<Ltmd> {
         Ltmd::new(base, DMat2::from_diagonal(DVec2::new(alpha / alpha_u, alpha / alpha_v)))
@@ -194,7 +194,7 @@ impl Ltmd {
 }
 
 impl MicrofacetDistribution for Ltmd {
-    /// Eq. 22.
+    /// seeds/001 Eq. 22.
     fn d(&self, m: DVec3) -> f64 {
         if m.z <= 0.0 {
             return 0.0;
@@ -204,7 +204,7 @@ impl MicrofacetDistribution for Ltmd {
         self.abs_det / (len2 * len2) * self.base.ndf().d(u / len2.sqrt())
     }
 
-    /// Eq. 12 in projected-area form: `A_M(v) = A(M^{−1} v)`.
+    /// seeds/001 Eq. 12 in projected-area form: `A_M(v) = A(M^{−1} v)`.
     fn projected_area(&self, w: DVec3) -> f64 {
         self.transformed_area(w, |x| self.base.ndf().projected_area(x))
     }
@@ -213,7 +213,7 @@ impl MicrofacetDistribution for Ltmd {
         self.transformed_area(w, |x| self.base.ndf().sampling_projected_area(x))
     }
 
-    /// Eq. 28 through the transform.
+    /// seeds/001 Eq. 28 through the transform.
     fn sample_visible(&self, wi: DVec3, u: [f64; 3]) -> Option<DVec3> {
         let w = self.base_direction_of(wi).try_normalize()?;
         let u_base = self.base.ndf().sample_visible(w, u)?;
@@ -222,7 +222,7 @@ impl MicrofacetDistribution for Ltmd {
         (wi.dot(m) > 0.0).then_some(m)
     }
 
-    /// Eqs. 25–26.
+    /// seeds/001 Eqs. 25–26.
     fn sample_normal(&self, u: [f64; 2]) -> Option<DVec3> {
         let u_base = self.base.ndf().sample_normal(u)?;
         self.normal_from_base(u_base).try_normalize()

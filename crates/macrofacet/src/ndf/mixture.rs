@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BeckmannUniformMixture {
     pub ndf: Gpss,
-    /// `R` of Eq. 40, in `(0, 1)`: `R = 1` would miss the downward-facing visible normals and
+    /// `R` of seeds/000 Eq. 40, in `(0, 1)`: `R = 1` would miss the downward-facing visible normals and
     /// `R = 0` ignores the peak.
     pub ratio: f64,
 }
@@ -40,7 +40,7 @@ impl BeckmannUniformMixture {
         }
     }
 
-    /// `P(m) = R P_Beckmann(m) + (1 − R) / (2π)` on the hemisphere around `wi` (Eq. 40).
+    /// `P(m) = R P_Beckmann(m) + (1 − R) / (2π)` on the hemisphere around `wi` (seeds/000 Eq. 40).
     /// Zero when no flake is visible from `wi`, as [`Self::sample`] then returns nothing.
     pub fn pdf(&self, wi: DVec3, m: DVec3) -> f64 {
         if wi.dot(m) <= 0.0 || self.ndf.visible_area(wi).is_none() {

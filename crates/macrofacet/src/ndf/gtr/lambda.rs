@@ -11,7 +11,7 @@ const MIXTURE_NODES: usize = 20;
 
 /// The projected area `∫ <w, m> D dm` of an isotropic height-field NDF from its excess
 /// `e(μ) = μ Λ(μ)`, for any (not necessarily unit) `w` — the area is homogeneous of degree 1:
-/// with `s = |w_t|`, `s e(w_z/s) + w_z` above and `s e(−w_z/s)` below (Eq. 39 gives the signed
+/// with `s = |w_t|`, `s e(w_z/s) + w_z` above and `s e(−w_z/s)` below (seeds/001 Eq. 39 gives the signed
 /// identity `A(w) − A(−w) = w_z`).
 pub(super) fn area_from_excess(w: DVec3, excess: impl Fn(f64) -> f64) -> f64 {
     let s = (w.x * w.x + w.y * w.y).sqrt();
@@ -138,20 +138,20 @@ pub(super) fn dimov_excess(alpha: f64, ln_alpha2: f64, weights: &[f64; 5], mu: f
     let b = (mu * mu + 1.0).sqrt(); // B_1
     let a = (mu * mu + a2).sqrt(); // A_1 = A_3 = B_4
     // Each closed form as its excess e_j = F_j − μ, F_j = μ/S_j, free of cancellation:
-    // Eq. 35: F_0 = (μ + sqrt(1 + μ²))/2.
+    // seeds/001 Eq. 35: F_0 = (μ + sqrt(1 + μ²))/2.
     let e0 = 0.5 / (b + mu);
-    // Eq. 36 regrouped in d = α² − 1 = expm1(L), L = ln α²:
+    // seeds/001 Eq. 36 regrouped in d = α² − 1 = expm1(L), L = ln α²:
     // e_1 = (d/L) / (A + B) · [1 − μ lnratio(z)/(μ + A)], z = −d/((A + B)(μ + A)).
     let d = ln_alpha2.exp_m1();
     let z = -d / ((a + b) * (mu + a));
     let e1 = relative_expm1(ln_alpha2) / (a + b) * (1.0 - mu * relative_ln_1p(z) / (mu + a));
-    // Eq. 37 (GGX).
+    // seeds/001 Eq. 37 (GGX).
     let e2 = ggx_excess(a2, mu);
-    // Eq. 38: F_3 = (α²(3α² + 1) + 2μ B_3 (μ + A_3)) / (4 B_3 A_3), B_3 = α² + 1, so
+    // seeds/001 Eq. 38: F_3 = (α²(3α² + 1) + 2μ B_3 (μ + A_3)) / (4 B_3 A_3), B_3 = α² + 1, so
     // e_3 = α² (3α² + 1 − 2μ B_3/(μ + A_3)) / (4 B_3 A_3).
     let b3 = a2 + 1.0;
     let e3 = a2 * (3.0 * a2 + 1.0 - 2.0 * mu * b3 / (mu + a)) / (4.0 * b3 * a);
-    // Eq. 39.
+    // seeds/001 Eq. 39.
     let e4 = gtr4_excess(a2, mu);
     // Spline of S_j/μ = 1/F_j (the weights sum to 1): 1/F = Σ w_j/F_j, and
     // e = F − μ = (1 − μ/F) F = F Σ w_j e_j/F_j.

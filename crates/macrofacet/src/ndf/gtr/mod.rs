@@ -4,16 +4,16 @@
 //! (`γ = 2`) to lighter tails (`γ > 2`). Anisotropy and every other tangent-plane transform come
 //! from [`super::Ltmd`] (seeds/001 Eq. 22), since GTR is shape-variant for `γ ≠ 2`.
 //!
-//! `D(m) = c / (1 − k cos²θ_m)^γ` with `k = 1 − α²` and the normalisation `c` of Eq. 32, which
+//! `D(m) = c / (1 − k cos²θ_m)^γ` with `k = 1 − α²` and the normalisation `c` of seeds/001 Eq. 32, which
 //! is written as `c = ex(L) / (π ex((1 − γ) L))`, `ex(y) = expm1(y)/y`, `L = ln α²`, so that
-//! the Berry limit `γ = 1` (Eq. 33) and `α = 1` (the uniform `D = 1/π`) are evaluated without
+//! the Berry limit `γ = 1` (seeds/001 Eq. 33) and `α = 1` (the uniform `D = 1/π`) are evaluated without
 //! 0/0.
 //!
 //! **Exact Smith Λ.** For `0 < γ < 2` the generalized Stieltjes identity
 //! `y^{−γ} = ∫_0^∞ t^{1−γ} (t + y)^{−2} dt / B(2 − γ, γ)` with `y = 1 − k cos²θ` writes GTR as a
 //! positive continuous mixture of isotropic GGX distributions of roughness
 //! `β_t² = (α² + t)/(1 + t)`, between `α` and 1. With `n = 4` instead of 2 the same identity
-//! writes `2 < γ < 4` as a mixture of GTR_4 distributions, whose Λ is closed-form (Eq. 39).
+//! writes `2 < γ < 4` as a mixture of GTR_4 distributions, whose Λ is closed-form (seeds/001 Eq. 39).
 //! Smith's Λ is linear in `D` (it is a projected area), so the exact projected area is the same
 //! mixture of closed forms. In `x = ln β²` the mixing density is a Jacobi weight (Beta-type end
 //! singularities with exponents `n − 1 − γ` at `β = α` and `γ − 1` at `β = 1`) times a smooth
@@ -22,7 +22,7 @@
 //! reproduce the projected area to ~1e-11 relative for `α >= 0.01` (tests/ndf.rs checks it
 //! against direct quadrature of `∫ <w, m> D dm`). `γ = 2` and `γ = 4` are closed forms.
 //!
-//! **Dimov's Λ** (Eqs. 34–39): the closed forms at `γ ∈ {0, 1, 2, 3, 4}` and a natural cubic
+//! **Dimov's Λ** (seeds/001 Eqs. 34–39): the closed forms at `γ ∈ {0, 1, 2, 3, 4}` and a natural cubic
 //! spline in `γ` between them. Exact at integer `γ`, an approximation otherwise; a medium whose
 //! Λ is not the projected area of its `D` does not conserve energy (the white furnace measures
 //! it, tests/slab.rs). Selected by [`GtrLambda::Dimov`]; the default is [`GtrLambda::Exact`].
@@ -68,7 +68,7 @@ pub struct Gtr {
     pub alpha: f64,
     pub gamma: f64,
     pub lambda: GtrLambda,
-    /// `c` of Eq. 32.
+    /// `c` of seeds/001 Eq. 32.
     norm: f64,
     /// `k = 1 − α²`, formed as `−expm1(ln α²)` (exact near `α = 1`).
     k: f64,
@@ -93,8 +93,8 @@ impl Gtr {
         }
         let ln_alpha2 = 2.0 * alpha.ln();
         let k = -ln_alpha2.exp_m1();
-        // Eq. 32: c = (γ−1)(α²−1) / (π (1 − α^{2(1−γ)})), regrouped as the product of two
-        // functions that are 1 at 0 (Eq. 33 is the x -> 0 limit, α = 1 the L -> 0 limit).
+        // seeds/001 Eq. 32: c = (γ−1)(α²−1) / (π (1 − α^{2(1−γ)})), regrouped as the product of two
+        // functions that are 1 at 0 (seeds/001 Eq. 33 is the x -> 0 limit, α = 1 the L -> 0 limit).
         let norm = relative_expm1(ln_alpha2) / relative_expm1((1.0 - gamma) * ln_alpha2) / PI;
         let mixture = ProjectedAreaMixture::new(alpha, gamma);
         let mut gtr = Gtr {
@@ -171,7 +171,7 @@ impl Gtr {
 }
 
 impl MicrofacetDistribution for Gtr {
-    /// Eq. 32 (Eq. 33 at `γ = 1`) for `m_z > 0`.
+    /// seeds/001 Eq. 32 (seeds/001 Eq. 33 at `γ = 1`) for `m_z > 0`.
     fn d(&self, m: DVec3) -> f64 {
         if m.z <= 0.0 {
             return 0.0;

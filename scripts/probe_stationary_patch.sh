@@ -7,6 +7,7 @@
 # (a = macrofacet, b = gpis: rel_diff = (mf - gpis) / gpis and its z from the halves).
 #
 # Usage: scripts/probe_stationary_patch.sh SIGMA LENGTHSCALE [REF_SPP]   (REF_SPP default 256)
+#   SIGMA / LENGTHSCALE "-": not passed (a SCENE with its own fields, e.g. bench/gpis_varying.xml).
 # Env: MFRENDER, MFCOMPARE (default build/p/...), THREADS (default nproc), NICE (default 19),
 #      SCENE (default bench/gpis_stationary_patch.xml), OUT (default out/probe12).
 set -euo pipefail
@@ -20,11 +21,14 @@ threads=${THREADS:-$(nproc)}
 outdir=${OUT:-out/probe12}/$(basename "$scene" .xml)_s${sigma}_l${lengthscale}_${ref_spp}
 mkdir -p "$outdir"
 half=$((ref_spp / 2))
+defines=()
+[ "$sigma" = - ] || defines+=(-D sigma="$sigma")
+[ "$lengthscale" = - ] || defines+=(-D lengthscale="$lengthscale")
 for method in macrofacet gpis; do
     for seed in 1 4; do
         TIMEFORMAT="$method seed $seed: %3U s user %3S s sys %3R s wall"
         time nice -n "${NICE:-19}" "$mfrender" "$scene" -D method="$method" -D spp="$half" \
-            -D sigma="$sigma" -D lengthscale="$lengthscale" --seed "$seed" --threads "$threads" \
+            "${defines[@]}" --seed "$seed" --threads "$threads" \
             -o "$outdir/${method}_$seed.exr" --quiet
     done
 done

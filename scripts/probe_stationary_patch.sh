@@ -9,7 +9,10 @@
 # Usage: scripts/probe_stationary_patch.sh SIGMA LENGTHSCALE [REF_SPP]   (REF_SPP default 256)
 #   SIGMA / LENGTHSCALE "-": not passed (a SCENE with its own fields, e.g. bench/gpis_varying.xml).
 # Env: MFRENDER, MFCOMPARE (default build/p/...), THREADS (default nproc), NICE (default 19),
-#      SCENE (default bench/gpis_stationary_patch.xml), OUT (default out/probe12).
+#      SCENE (default bench/gpis_stationary_patch.xml), OUT (default out/probe12),
+#      SEEDS (default "1 4": an even count of seeds, REF_SPP/2 spp each; with 2k seeds the halves
+#      are the averages of the odd-numbered and of the even-numbered seeds' renders, so each
+#      method gets k * REF_SPP spp; renders already in OUT are reused).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ $# -ge 2 ] || { echo "usage: $0 SIGMA LENGTHSCALE [REF_SPP]" >&2; exit 2; }
@@ -24,15 +27,30 @@ half=$((ref_spp / 2))
 defines=()
 [ "$sigma" = - ] || defines+=(-D sigma="$sigma")
 [ "$lengthscale" = - ] || defines+=(-D lengthscale="$lengthscale")
+read -r -a seeds <<< "${SEEDS:-1 4}"
+[ $((${#seeds[@]} % 2)) = 0 ] || { echo "$0: SEEDS needs an even count" >&2; exit 2; }
 for method in macrofacet gpis; do
-    for seed in 1 4; do
+    for seed in "${seeds[@]}"; do
+        [ -f "$outdir/${method}_$seed.exr" ] && continue
         TIMEFORMAT="$method seed $seed: %3U s user %3S s sys %3R s wall"
         time nice -n "${NICE:-19}" "$mfrender" "$scene" -D method="$method" -D spp="$half" \
             "${defines[@]}" --seed "$seed" --threads "$threads" \
             -o "$outdir/${method}_$seed.exr" --quiet
     done
 done
-halves=("$outdir/macrofacet_1.exr" "$outdir/macrofacet_4.exr" "$outdir/gpis_1.exr" "$outdir/gpis_4.exr")
-echo "== $scene sigma $sigma lengthscale $lengthscale, $ref_spp spp per method (a = macrofacet, b = gpis)"
-"$mfcompare" patches 1 1 "${halves[@]}" | tee "$outdir/image.tsv"
-"$mfcompare" patches 4 4 "${halves[@]}" | tee "$outdir/patches.tsv"
+halves=()
+for method in macrofacet gpis; do
+    for parity in 0 1; do
+        parts=()
+        for ((i = parity; i < ${#seeds[@]}; i += 2)); do parts+=("$outdir/${method}_${seeds[i]}.exr"); done
+        if [ ${#parts[@]} = 1 ]; then
+            halves+=("${parts[0]}")
+        else
+            "$mfcompare" average "$outdir/${method}_half$parity.exr" "${parts[@]}"
+            halves+=("$outdir/${method}_half$parity.exr")
+        fi
+    done
+done
+echo "== $scene sigma $sigma lengthscale $lengthscale, $((ref_spp * ${#seeds[@]} / 2)) spp per method, seeds ${seeds[*]} (a = macrofacet, b = gpis)"
+"$mfcompare" patches 1 1 "${halves[@]}" | tee "$outdir/image_${#seeds[@]}seeds.tsv"
+"$mfcompare" patches 4 4 "${halves[@]}" | tee "$outdir/patches_${#seeds[@]}seeds.tsv"

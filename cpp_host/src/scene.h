@@ -32,7 +32,8 @@ struct Camera {
 enum class LightSampling { Mis, BsdfOnly, EmitterOnly };
 
 struct IntegratorSettings {
-    bool volumetric = true;  // volpath (media) or path (media ignored)
+    std::string name = "path";  // the XML plugin: volpath, path or direct (path with max_depth 2)
+    bool volumetric = true;  // volpath (media) or path and direct (media ignored)
     int max_depth = -1;      // -1 = unbounded
     int rr_depth = 5;
     bool hide_emitters = false;

@@ -57,7 +57,7 @@ public:
         try {
             if (sensor) build_sensor(*sensor);
             if (integrator) build_integrator(*integrator);
-            else scene_->integrator = IntegratorSettings{false, -1, 5, false};  // Mitsuba's default: path
+            else scene_->integrator = IntegratorSettings{"path", false, -1, 5, false};  // Mitsuba's default: path
         } catch (const AlreadyReported&) {
         } catch (const Error& e) {
             errors.add(e);
@@ -748,6 +748,22 @@ private:
             if (o.has("position")) p = o.get_point("position", p);
             else p = o.get_transform("to_world", Mat4()).point(Vec3(0.0f));
             e = std::make_shared<PointEmitter>(p, nonneg_rgb(o, "intensity", Rgb(1.0f)));
+        } else if (t == "spot") {
+            // Mitsuba's spot: intensity is a constant, texture (optional) must vary over uv
+            if (o.child_named("texture", "intensity")) throw perr(o, "intensity", "cannot be spatially varying (as in Mitsuba)");
+            if (o.has("texture")) throw perr(o, "texture", "must be a spatially varying texture (as in Mitsuba)");
+            std::shared_ptr<const Texture> tex;
+            if (const Child* c = o.child_named("texture", "texture")) tex = build_texture(*c->obj);
+            float cutoff = o.get_float("cutoff_angle", 20.0f);
+            float beam = o.get_float("beam_width", cutoff * 0.75f);
+            // Mitsuba projects the texture with tan(cutoff_angle): the cone must stay in front
+            float max_cutoff = tex ? 90.0f : 180.0f;
+            if (!(cutoff > 0 && cutoff < max_cutoff))
+                throw perr(o, "cutoff_angle", tex ? "must lie in (0, 90) degrees with a texture" : "must lie in (0, 180) degrees");
+            if (!(beam >= 0 && beam <= cutoff)) throw perr(o, "beam_width", "must lie in [0, cutoff_angle] degrees");
+            const float deg = kPi / 180.0f;
+            e = std::make_shared<SpotEmitter>(o.get_transform("to_world", Mat4()), nonneg_rgb(o, "intensity", Rgb(1.0f)),
+                                              cutoff * deg, beam * deg, tex);
         } else if (t == "directional") {
             Vec3 d(0, 0, 1);
             if (o.has("direction") && o.has("to_world")) throw err(o, "specify either direction or to_world, not both");
@@ -772,7 +788,7 @@ private:
                 if (v < 0) throw err(o, "environment map \"" + path + "\" has negative pixel values");
             e = std::make_shared<EnvmapEmitter>(std::move(img.rgb), img.width, img.height, scale, tw);
         } else {
-            throw err(o, "unsupported emitter plugin \"" + t + "\" (supported: area, point, directional, constant, envmap)");
+            throw err(o, "unsupported emitter plugin \"" + t + "\" (supported: area, point, spot, directional, constant, envmap)");
         }
         o.check_all_used();
         return e;
@@ -891,10 +907,44 @@ private:
     }
 
     void build_integrator(const SceneObject& o) {
+        if (o.type == "moment") {
+            // Mitsuba's moment renders its nested integrator(s) and writes, after the R, G, B of
+            // the (first) nested image, each image and its per-pixel second moment as AOVs.
+            auto nested = o.children_with_tag("integrator");
+            if (nested.size() != 1) throw err(o, "needs exactly one nested <integrator> (mfrender renders one image)");
+            o.check_all_used();
+            const SceneObject& inner = *nested[0]->obj;
+            skip_if_broken(inner);
+            build_integrator(inner);
+            if (report_)
+                report_->warnings.push_back(o.loc.str() + ": " + o.describe() + ": writing the R, G, B image of the nested " +
+                                            inner.describe() + "; the moment AOV channels are not written");
+            return;
+        }
         IntegratorSettings s;
+        s.name = o.type;
+        if (o.type == "direct") {
+            // Mitsuba's direct: emission seen directly plus one bounce of direct light from
+            // emitter_samples and bsdf_samples (shading_samples sets both), combined by MIS and
+            // ignoring media -- the path estimator with max_depth 2. mfrender takes one sample of
+            // each strategy (0 leaves it out): the same image in expectation, not the same noise.
+            long long shading = o.get_int("shading_samples", 1);
+            long long n_em = o.get_int("emitter_samples", shading), n_bsdf = o.get_int("bsdf_samples", shading);
+            for (const char* name : {"shading_samples", "emitter_samples", "bsdf_samples"})
+                if (o.has(name) && !(o.get_int(name, 1) == 0 || o.get_int(name, 1) == 1))
+                    throw perr(o, name, "must be 0 or 1 in mfrender (more samples per bounce are not supported)");
+            if (n_em == 0 && n_bsdf == 0) throw err(o, "emitter_samples and bsdf_samples are both 0 (nothing to render)");
+            s.volumetric = false;
+            s.max_depth = 2;
+            s.light_sampling = n_em == 0 ? LightSampling::BsdfOnly : n_bsdf == 0 ? LightSampling::EmitterOnly : LightSampling::Mis;
+            s.hide_emitters = o.get_bool("hide_emitters", false);
+            o.check_all_used();
+            scene_->integrator = s;
+            return;
+        }
         if (o.type == "volpath") s.volumetric = true;
         else if (o.type == "path") s.volumetric = false;
-        else throw err(o, "unsupported integrator plugin \"" + o.type + "\" (supported: volpath, path)");
+        else throw err(o, "unsupported integrator plugin \"" + o.type + "\" (supported: volpath, path, direct, moment)");
         long long md = o.get_int("max_depth", -1);
         if (md < -1) throw perr(o, "max_depth", "must be -1 (unbounded) or >= 0");
         long long rr = o.get_int("rr_depth", 5);
@@ -968,7 +1018,8 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               shape; the macrofacet names that apply: sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,
               specular_reflectance; plus memory renewal|renewal_plus, step_correlation)
-  emitters    area (radiance), point (position | to_world, intensity), directional
+  emitters    area (radiance), point (position | to_world, intensity), spot (to_world,
+              intensity, cutoff_angle, beam_width, texture), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)
   sensor      perspective (fov + fov_axis x|y|diagonal|smaller|larger, or focal_length such as
@@ -976,11 +1027,13 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               (read, no effect on a pinhole), to_world, near_clip, far_clip) with hdrfilm (width,
               height, rfilter gaussian (stddev; the default, 0.5) | tent (radius) | box) and
               independent sampler (sample_count, seed)
-  integrators volpath, path (max_depth, rr_depth, hide_emitters)
+  integrators volpath, path (max_depth, rr_depth, hide_emitters), direct (shading_samples,
+              emitter_samples, bsdf_samples: 0 or 1; hide_emitters), moment around one of them
+              (its R, G, B image; the moment AOVs are not written)
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. plastic,
 roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
-normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media,
+normalmap, projector, instance/shapegroup, heterogeneous media,
 spectra from files or wavelength lists.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only

@@ -13,7 +13,8 @@
 # .spd) and a missing <path> folder is created, inside the copy only, and the check is repeated.
 # Each scene is then one of:
 #   opens    --check succeeds (column 'stand-ins' says how many files were stood in for)
-#   refused  an unsupported plugin or parameter (listed: 'kind:plugin' or 'plugin.parameter')
+#   refused  an unsupported plugin, parameter or element (listed: 'kind:plugin', 'plugin.parameter',
+#            '<element>' or '<element attribute=...>')
 #   other    any other problem (the first message is shown)
 # Output: one tab-separated row per scene (scene, class, stand-ins, reasons), then the number of
 # scenes refused for each reason, most frequent first. MFRENDER selects the binary (default:
@@ -152,6 +153,7 @@ missing_file = re.compile(r'refers to a missing file "([^"]+)"|spectrum file "([
 missing_dir = re.compile(r'<path>: folder "([^"]+)" not found')
 unsupported = re.compile(r'unsupported (\w+) plugin "([^"]+)"')
 unknown_param = re.compile(r'unknown parameter "([^"]+)" \(\w+\) for plugin "([^"]+)"')
+unknown_elem = re.compile(r'unknown element <(\w+)>|<(\w+)>: unexpected attribute "(\w+)"')
 located = re.compile(r'^mfrender: error: [^:]+:\d+: ')
 
 def inside(p):
@@ -184,7 +186,9 @@ for scene in scenes:
         m = unsupported.search(line)
         if m: why.append('%s:%s' % (m.group(1), m.group(2))); continue
         m = unknown_param.search(line)
-        if m: why.append('%s.%s' % (m.group(2), m.group(1)))
+        if m: why.append('%s.%s' % (m.group(2), m.group(1))); continue
+        m = unknown_elem.search(line)
+        if m: why.append('<%s>' % m.group(1) if m.group(1) else '<%s %s=...>' % (m.group(2), m.group(3)))
     if why:
         why = sorted(set(why))
         reasons.update(why)

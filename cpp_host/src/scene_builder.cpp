@@ -13,6 +13,7 @@
 #include "library_abi.h"
 #include "mean_surface.h"
 #include "medium_gpis.h"
+#include "medium_heterogeneous.h"
 #include "medium_fields.h"
 #include "medium_macrofacet.h"
 #include "sdf_grid.h"
@@ -483,22 +484,64 @@ private:
         auto it = media_.find(&o);
         if (it != media_.end()) return it->second;
         skip_if_broken(o);
+        if (o.type == "heterogeneous") {
+            auto m = build_heterogeneous(o);
+            media_[&o] = m;
+            return m;
+        }
         if (o.type != "homogeneous")
-            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, macrofacet, gpis)");
+            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, heterogeneous, macrofacet, gpis)");
         Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
         Rgb albedo = nonneg_rgb(o, "albedo", Rgb(0.75f));
         if (albedo.max() > 1.0f) throw perr(o, "albedo", "must lie in [0, 1]");
         float scale = o.get_float("scale", 1.0f);
         if (!(scale >= 0)) throw perr(o, "scale", "must be non-negative");
         o.get_bool("sample_emitters", true);  // accepted; next-event estimation is always used
-        auto phases = o.children_with_tag("phase");
-        if (phases.size() > 1) throw err(o, "expects at most one nested <phase>");
-        std::shared_ptr<PhaseFunction> ph =
-            phases.empty() ? std::make_shared<IsotropicPhase>() : build_phase(*phases[0]->obj);
+        std::shared_ptr<PhaseFunction> ph = medium_phase(o);
         o.check_all_used();
         auto m = std::make_shared<HomogeneousMedium>(sigma_t * scale, albedo, ph);
         media_[&o] = m;
         return m;
+    }
+
+    /// The nested <phase> of a medium (isotropic without one).
+    std::shared_ptr<PhaseFunction> medium_phase(const SceneObject& o) {
+        auto phases = o.children_with_tag("phase");
+        if (phases.size() > 1) throw err(o, "expects at most one nested <phase>");
+        return phases.empty() ? std::make_shared<IsotropicPhase>() : build_phase(*phases[0]->obj);
+    }
+
+    /// A volume parameter of a medium as Mitsuba's props.volume() reads it: a nested or referenced
+    /// <volume>, or a constant (a constvolume with its default box, the unit cube).
+    std::shared_ptr<const Volume> medium_volume(const SceneObject& o, const std::string& name, float def, float max_value,
+                                                Aabb* box) {
+        const Child* c = o.child_named("volume", name);
+        if (c && o.has(name)) throw err(o, "parameter " + quote(name) + " is given twice (a value and a volume)");
+        if (c) {
+            skip_if_broken(*c->obj);
+            return build_rgb_volume(*c->obj, volume_files_, max_value, box);
+        }
+        Rgb v = nonneg_rgb(o, name, Rgb(def));
+        if (v.max() > max_value) throw perr(o, name, "must lie in [0, " + number_str(max_value) + "]");
+        *box = Aabb();
+        box->expand(Vec3(0.0f));
+        box->expand(Vec3(1.0f));
+        const float value[3] = {v.r, v.g, v.b};
+        return make_constant_volume(value, 3, 3);
+    }
+
+    std::shared_ptr<const Medium> build_heterogeneous(const SceneObject& o) {
+        Aabb box, albedo_box;
+        auto sigma_t = medium_volume(o, "sigma_t", 1.0f, kInf, &box);
+        auto albedo = medium_volume(o, "albedo", 0.75f, 1.0f, &albedo_box);
+        float scale = o.get_float("scale", 1.0f);
+        if (!(scale >= 0 && std::isfinite(scale))) throw perr(o, "scale", "must be finite and non-negative");
+        o.get_bool("sample_emitters", true);  // accepted; next-event estimation is always used
+        if (!o.get_bool("has_spectral_extinction", true))
+            throw perr(o, "has_spectral_extinction", "false is not supported (mfrender tracks RGB extinction)");
+        std::shared_ptr<PhaseFunction> ph = medium_phase(o);
+        o.check_all_used();
+        return std::make_shared<HeterogeneousMedium>(sigma_t, scale, albedo, box, ph);
     }
 
     // ------------------------------------------------------------------ shapes
@@ -1003,6 +1046,8 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               dielectric (int_ior, ext_ior: number or name), null, twosided (one or two bsdfs)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
+              heterogeneous (sigma_t, albedo: constants or <volume> constvolume | gridvolume;
+              scale; phase; the medium fills the box of sigma_t's volume, as in Mitsuba)
               macrofacet (as the interior of its mean-surface shape; parameters as in the
               C ABI: sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z,
               lengthscale*, gamma, lambda, stretch | transform_*, micro_bsdf, material |
@@ -1033,7 +1078,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. plastic,
 roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
-normalmap, projector, instance/shapegroup, heterogeneous media,
+normalmap, projector, instance/shapegroup,
 spectra from files or wavelength lists.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only

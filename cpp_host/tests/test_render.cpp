@@ -12,11 +12,15 @@
 //    pixel-wise difference), in media and on surfaces, for area, point and environment lights.
 //  * Spot light: a diffuse plane lit and seen from the spot's position has the analytic radiance
 //    ρ I f(θ) cos³θ / (π z²) (Mitsuba's linear falloff f); exactly 0 beyond the cutoff.
+//  * Heterogeneous medium: through a grid varying along the view axis (and a chromatic constant
+//    volume) the transmittance is exp(-scale ∫ sigma_t) over the volume's box only (Mitsuba's
+//    extent), for camera paths (delta tracking) and shadow rays (ratio tracking): 4.5 SE.
 //  * direct = path with max_depth 2 (bit-identical), moment(X) = X (bit-identical); refusals.
 //  * Default BSDF: an area light without <bsdf> reflects nothing (Mitsuba: black diffuse): exactly
 //    its radiance under an environment; a plain shape without one is diffuse 0.5.
 #include <unistd.h>
 
+#include <cstdint>
 #include <vector>
 
 #include "check.h"
@@ -436,6 +440,84 @@ TEST_CASE(direct_and_moment_integrators) {
     CHECK_THROWS_WITH(built(R"(<integrator type="moment"/>)"), "exactly one nested <integrator>");
     CHECK_THROWS_WITH(built(R"(<integrator type="moment"><integrator type="ptracer"/></integrator>)"),
                       "unsupported integrator plugin \"ptracer\"");
+}
+
+TEST_CASE(heterogeneous_transmittance) {
+    // A 1x1x4 grid (cell centres at z = 1/8, 3/8, 5/8, 7/8 of its box: 0.2, 1.0, 0.4, 0.8; clamped
+    // beyond the end centres) placed on [-0.5, 0.5]^3 inside a null cube [-1, 1]^3: along z the
+    // trilinear density integrates to 0.6, so with scale 2 the optical depth is 1.2 / cos θ --
+    // beyond the box there is no medium (Mitsuba's intersect_aabb; a clamped grid evaluated there
+    // would add 1.0). Albedo 0, constant environment 1: each pixel is the transmittance.
+    const std::string vol = work("hetero_ramp.vol");
+    {
+        std::string b = "VOL";
+        b.push_back(char(3));
+        auto put_i = [&](int32_t v) { b.append(reinterpret_cast<const char*>(&v), 4); };
+        auto put_f = [&](float v) { b.append(reinterpret_cast<const char*>(&v), 4); };
+        for (int32_t v : {1, 1, 1, 4, 1}) put_i(v);  // float32, 1x1x4, 1 channel
+        for (float v : {0.f, 0.f, 0.f, 1.f, 1.f, 1.f}) put_f(v);
+        for (float v : {0.2f, 1.0f, 0.4f, 0.8f}) put_f(v);
+        write_file(vol, b);
+    }
+    struct Case { std::string sigma_t; double tau[3]; };
+    const std::string box = R"(<transform name="to_world"><translate value="-0.5, -0.5, -0.5"/></transform>)";
+    const Case cases[] = {
+        {R"(<volume name="sigma_t" type="gridvolume"><string name="filename" value="hetero_ramp.vol"/>)" + box + "</volume>", {1.2, 1.2, 1.2}},
+        {R"(<volume name="sigma_t" type="constvolume"><rgb name="value" value="0.5, 0.25, 1"/>)" + box + "</volume>", {1.0, 0.5, 2.0}}};
+    int k = 0;
+    for (const Case& c : cases) {
+        const std::string medium = R"(<shape type="cube"><bsdf type="null"/><medium type="heterogeneous" name="interior">)" + c.sigma_t +
+                                   R"(<float name="scale" value="2"/><rgb name="albedo" value="0"/></medium></shape>)";
+        const std::string scene = work("hetero" + std::to_string(k) + ".xml"), out = work("hetero" + std::to_string(k) + ".exr");
+        ++k;
+        write_file(scene, "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(5.0f, 2.0f, 16, 16, 256) + medium +
+                              "<emitter type=\"constant\"/></scene>");
+        CHECK(run({scene, "-o", out, "--quiet"}) == 0);
+        Stats st = stats(read_exr(out), 0.0);
+        for (int ch = 0; ch < 3; ++ch) {
+            double expect = 0;  // mean over pixel centres of exp(-tau / cos θ), cos θ >= 0.9998
+            float th = std::tan(1.0f * kPi / 180.0f);
+            for (int y = 0; y < 16; ++y)
+                for (int x = 0; x < 16; ++x) {
+                    double lx = (1 - 2 * (x + 0.5) / 16) * th, ly = (1 - 2 * (y + 0.5) / 16) * th;
+                    expect += std::exp(-c.tau[ch] * std::sqrt(1 + lx * lx + ly * ly)) / 256.0;
+                }
+            double tol = 4.5 * st.se[ch] + 1e-4;
+            CHECK_MSG(std::fabs(st.mean[ch] - expect) < tol, "camera paths, case " + std::to_string(k) + " ch " + std::to_string(ch) +
+                                                                 ": " + std::to_string(st.mean[ch]) + " vs " + std::to_string(expect));
+            std::printf("  heterogeneous case %d ch%d (camera paths): %.5f expected %.5f (se %.5f)\n", k, ch, st.mean[ch], expect,
+                        st.se[ch]);
+        }
+        // shadow rays straight down the axis: ratio tracking, averaged over 20000 estimates
+        auto sc = build_scene(parse_scene_string("<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(5.0f, 2.0f, 4, 4, 1) +
+                                                     medium + "</scene>", scene, {}),
+                              BuildOptions(), nullptr);
+        PathIntegrator integ(*sc);
+        double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+        const int n = 20000;
+        for (int i = 0; i < n; ++i) {
+            Sampler smp(7, uint32_t(i), 0);
+            Rgb T = integ.shadow_transmittance(Vec3(0, 0, 2), Vec3(0, 0, -1), kInf, nullptr, smp);
+            for (int ch = 0; ch < 3; ++ch) sum[ch] += T[ch], sum2[ch] += double(T[ch]) * T[ch];
+        }
+        for (int ch = 0; ch < 3; ++ch) {
+            double m = sum[ch] / n, se = std::sqrt(std::max(0.0, sum2[ch] / n - m * m) / n), expect = std::exp(-c.tau[ch]);
+            CHECK_MSG(std::fabs(m - expect) < 4.5 * se + 2e-4 * expect,
+                      "shadow rays, case " + std::to_string(k) + " ch " + std::to_string(ch) + ": " + std::to_string(m) + " vs " +
+                          std::to_string(expect) + " (se " + std::to_string(se) + ")");
+            std::printf("  heterogeneous case %d ch%d (shadow rays): %.5f expected %.5f (se %.5f)\n", k, ch, m, expect, se);
+        }
+    }
+    // refusals: albedo above 1 in a grid, has_spectral_extinction false, a 6-channel volume
+    auto build = [&](const std::string& inner) {
+        build_scene(parse_scene_string("<scene version=\"3.0.0\">" + camera(5.0f, 2.0f, 4, 4, 1) +
+                                           R"(<shape type="cube"><bsdf type="null"/><medium type="heterogeneous" name="interior">)" + inner +
+                                           "</medium></shape></scene>", work("hetero_bad.xml"), {}),
+                    BuildOptions(), nullptr);
+    };
+    CHECK_THROWS_WITH(build(R"(<boolean name="has_spectral_extinction" value="false"/>)"), "has_spectral_extinction");
+    CHECK_THROWS_WITH(build(R"(<volume name="albedo" type="constvolume"><float name="value" value="1.5"/></volume>)"), "outside [0, 1]");
+    CHECK_THROWS_WITH(build(R"(<float name="albedo" value="2"/>)"), "must lie in [0, 1]");
 }
 
 TEST_MAIN()

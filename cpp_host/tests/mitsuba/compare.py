@@ -32,6 +32,7 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     # data files the scenes refer to
     subprocess.run([sys.executable, os.path.join(HERE, 'make_serialized.py'), os.path.join(a.work, 'torus.serialized')], check=True)
+    subprocess.run([sys.executable, os.path.join(HERE, 'make_blob_vol.py'), a.work], check=True)
     scenes = a.scenes or sorted(glob.glob(os.path.join(HERE, '*.xml')))
     passed = failed = 0
     for scene in scenes:

@@ -207,10 +207,18 @@ private:
             std::shared_ptr<Bsdf> f = build_bsdf(*kids[0]->obj);
             std::shared_ptr<Bsdf> bk = kids.size() == 2 ? build_bsdf(*kids[1]->obj) : f;
             if (f->is_null() || bk->is_null()) throw err(o, "a null BSDF cannot be made two-sided");
+            if (f->name() == "mask" || bk->name() == "mask")
+                throw err(o, "a mask inside twosided is not supported: make the mask the outer BSDF (mask of twosided)");
             b = make_twosided(f, bk);
+        } else if (t == "mask") {
+            auto kids = o.children_with_tag("bsdf");
+            if (kids.size() != 1) throw err(o, "expects one nested <bsdf>");
+            std::shared_ptr<Bsdf> nested = build_bsdf(*kids[0]->obj);
+            if (nested->is_null() || nested->name() == "mask") throw err(o, "the nested BSDF of a mask cannot be null or a mask");
+            b = make_mask(texture_param(o, "opacity", Rgb(0.5f)), nested);
         } else {
             throw err(o, "unsupported BSDF plugin \"" + t +
-                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided)");
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided, mask)");
         }
         o.check_all_used();
         bsdfs_[&o] = b;
@@ -1043,7 +1051,8 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               separable (default, Mitsuba's G1*G1) | height_correlated (1/(1+Lambda_i+Lambda_o));
               from the library: gtr's gamma, lambda exact|dimov, and the microsurface transform
               stretch | transform_xx,_xy,_yx,_yy of any distribution (seeds/001)),
-              dielectric (int_ior, ext_ior: number or name), null, twosided (one or two bsdfs)
+              dielectric (int_ior, ext_ior: number or name), null, twosided (one or two bsdfs),
+              mask (opacity (tex), one nested bsdf: absent with probability 1 - opacity)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
               heterogeneous (sigma_t, albedo: constants or <volume> constvolume | gridvolume;
@@ -1077,7 +1086,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               (its R, G, B image; the moment AOVs are not written)
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. plastic,
-roughplastic, roughdielectric, thindielectric, principled, mask, blendbsdf, bumpmap,
+roughplastic, roughdielectric, thindielectric, principled, blendbsdf, bumpmap,
 normalmap, projector, instance/shapegroup,
 spectra from files or wavelength lists.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most

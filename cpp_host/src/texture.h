@@ -19,6 +19,9 @@ class Texture {
 public:
     virtual ~Texture() = default;
     virtual Rgb eval(const Vec2& uv) const = 0;
+    /// Mitsuba's Texture::eval_1, the scalar that monochromatic users (mask opacity) read: the
+    /// luminance of eval(), except where Mitsuba's own eval_1 differs (checkerboard).
+    virtual float eval_1(const Vec2& uv) const { return eval(uv).luminance(); }
     /// Per-channel bounds (3 channels) over all uv.
     virtual ValueRange range() const = 0;
     /// Per-channel bounds over the uv rectangle [uv_lo, uv_hi] (before to_uv); by default range().

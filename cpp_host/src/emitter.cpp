@@ -140,6 +140,22 @@ bool SpotEmitter::sample_li(const Vec3& ref, const Vec2&, EmitterSample* s) cons
     return true;
 }
 
+ProjectorEmitter::ProjectorEmitter(const Mat4& to_world, const Vec2& tan_half, std::shared_ptr<const Texture> irradiance, float scale)
+    : to_world_(to_world), to_local_(to_world.inverse()), p_(to_world.point(Vec3(0.0f))), axis_(to_world.vector(Vec3(0, 0, 1))),
+      tan_half_(tan_half), irradiance_(std::move(irradiance)), scale_(scale) {}
+
+bool ProjectorEmitter::sample_li(const Vec3& ref, const Vec2&, EmitterSample* s) const {
+    const Vec3 local = to_local_.point(ref);
+    if (!(local.z > 0)) return false;
+    const Vec2 uv(0.5f - 0.5f * local.x / (local.z * tan_half_.x), 0.5f - 0.5f * local.y / (local.z * tan_half_.y));
+    if (!(uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1)) return false;
+    if (!sample_point_light(p_, Rgb(1.0f), ref, s)) return false;
+    const float cos_theta = -dot(axis_, s->wi);
+    if (!(cos_theta > 0)) return false;
+    s->Li = irradiance_->eval(uv) * (kPi * scale_ / (local.z * local.z * cos_theta));
+    return true;
+}
+
 bool DirectionalEmitter::sample_li(const Vec3&, const Vec2&, EmitterSample* s) const {
     s->wi = -d_;
     s->dist = kInf;

@@ -1,4 +1,4 @@
-// mfhost — emitters: area, point, spot, directional, constant, envmap.
+// mfhost — emitters: area, point, spot, projector, directional, constant, envmap.
 #pragma once
 
 #include <memory>
@@ -100,6 +100,26 @@ private:
     Rgb I_;
     float cutoff_, cos_cutoff_, cos_beam_, inv_transition_, uv_factor_;
     std::shared_ptr<const Texture> texture_;
+};
+
+/// Mitsuba 3's `projector`: the reciprocal of a perspective sensor at to_world's origin looking
+/// along local +z; `irradiance` is the irradiance on its image plane at z = 1 (uv as Mitsuba's
+/// camera: u = 1/2 - x / (2 z tan_x), v = 1/2 - y / (2 z tan_y)), times `scale`. A point at local
+/// depth z in direction cos θ from the axis receives pi E(uv) scale / (z² cos θ) -- Mitsuba's
+/// inverse-importance factor, so that a plane facing the projector at z = 1 gets E.
+class ProjectorEmitter final : public Emitter {
+public:
+    ProjectorEmitter(const Mat4& to_world, const Vec2& tan_half, std::shared_ptr<const Texture> irradiance, float scale);
+    bool sample_li(const Vec3& ref, const Vec2& u, EmitterSample* s) const override;
+    bool is_delta() const override { return true; }
+    std::string name() const override { return "projector"; }
+
+private:
+    Mat4 to_world_, to_local_;
+    Vec3 p_, axis_;  // axis_: to_world applied to local +z (not normalised, as Mitsuba's ds.n)
+    Vec2 tan_half_;
+    std::shared_ptr<const Texture> irradiance_;
+    float scale_;
 };
 
 class DirectionalEmitter final : public Emitter {

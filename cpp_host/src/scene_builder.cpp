@@ -815,6 +815,15 @@ private:
             const float deg = kPi / 180.0f;
             e = std::make_shared<SpotEmitter>(o.get_transform("to_world", Mat4()), nonneg_rgb(o, "intensity", Rgb(1.0f)),
                                               cutoff * deg, beam * deg, tex);
+        } else if (t == "projector") {
+            // Mitsuba's projector: the perspective sensor's mapping, the image's aspect from the
+            // irradiance texture's resolution (1 x 1 for a constant)
+            auto irradiance = texture_param(o, "irradiance", Rgb(1.0f));
+            auto res = irradiance->resolution();
+            float scale = o.get_float("scale", 1.0f);
+            if (!(scale >= 0 && std::isfinite(scale))) throw perr(o, "scale", "must be finite and non-negative");
+            e = std::make_shared<ProjectorEmitter>(o.get_transform("to_world", Mat4()), fov_tangents(o, res.first, res.second),
+                                                   irradiance, scale);
         } else if (t == "directional") {
             Vec3 d(0, 0, 1);
             if (o.has("direction") && o.has("to_world")) throw err(o, "specify either direction or to_world, not both");
@@ -839,17 +848,16 @@ private:
                 if (v < 0) throw err(o, "environment map \"" + path + "\" has negative pixel values");
             e = std::make_shared<EnvmapEmitter>(std::move(img.rgb), img.width, img.height, scale, tw);
         } else {
-            throw err(o, "unsupported emitter plugin \"" + t + "\" (supported: area, point, spot, directional, constant, envmap)");
+            throw err(o, "unsupported emitter plugin \"" + t + "\" (supported: area, point, spot, projector, directional, constant, envmap)");
         }
         o.check_all_used();
         return e;
     }
 
     // ------------------------------------------------------------------ sensor & integrator
-    void build_sensor(const SceneObject& o) {
-        if (o.type != "perspective") throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective)");
-        Camera& cam = scene_->camera;
-        cam.to_world = o.get_transform("to_world", Mat4());
+    /// Mitsuba's parse_fov for a perspective sensor (or projector) whose image is width x height:
+    /// the tangents of the half field of view along x and y.
+    Vec2 fov_tangents(const SceneObject& o, int width, int height) {
         // Mitsuba's parse_fov: fov along fov_axis, or a focal length on 35 mm film (36 x 24 mm),
         // i.e. a diagonal fov of 2 atan(sqrt(36^2 + 24^2) / (2 f)); default focal_length 50mm.
         if (o.has("fov") && o.has("focal_length")) throw err(o, "specify either fov or focal_length, not both");
@@ -870,6 +878,31 @@ private:
             axis = "diagonal";
             if (o.has("fov_axis")) o.get_string("fov_axis", "x");  // Mitsuba ignores it with focal_length
         }
+        Vec2 tan_half;
+        float aspect = float(width) / float(height);
+        float t = std::tan(0.5f * fov * kPi / 180.0f);
+        if (axis == "smaller") axis = width <= height ? "x" : "y";
+        if (axis == "larger") axis = width >= height ? "x" : "y";
+        if (axis == "x") {
+            tan_half.x = t;
+            tan_half.y = t / aspect;
+        } else if (axis == "y") {
+            tan_half.y = t;
+            tan_half.x = t * aspect;
+        } else if (axis == "diagonal") {
+            float diag = std::sqrt(aspect * aspect + 1.0f);
+            tan_half.x = t * aspect / diag;
+            tan_half.y = t / diag;
+        } else {
+            throw perr(o, "fov_axis", "must be x, y, diagonal, smaller or larger");
+        }
+        return tan_half;
+    }
+
+    void build_sensor(const SceneObject& o) {
+        if (o.type != "perspective") throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective)");
+        Camera& cam = scene_->camera;
+        cam.to_world = o.get_transform("to_world", Mat4());
         // Mitsuba's perspective (pinhole) reads and ignores focus_distance (only thinlens uses it)
         if (!(o.get_float("focus_distance", 1.0f) > 0)) throw perr(o, "focus_distance", "must be positive");
         cam.near_clip = o.get_float("near_clip", 1e-2f);
@@ -915,23 +948,9 @@ private:
             }
             f.check_all_used();
         }
-        float aspect = float(cam.width) / float(cam.height);
-        float t = std::tan(0.5f * fov * kPi / 180.0f);
-        if (axis == "smaller") axis = cam.width <= cam.height ? "x" : "y";
-        if (axis == "larger") axis = cam.width >= cam.height ? "x" : "y";
-        if (axis == "x") {
-            cam.tan_half_x = t;
-            cam.tan_half_y = t / aspect;
-        } else if (axis == "y") {
-            cam.tan_half_y = t;
-            cam.tan_half_x = t * aspect;
-        } else if (axis == "diagonal") {
-            float diag = std::sqrt(aspect * aspect + 1.0f);
-            cam.tan_half_x = t * aspect / diag;
-            cam.tan_half_y = t / diag;
-        } else {
-            throw perr(o, "fov_axis", "must be x, y, diagonal, smaller or larger");
-        }
+        const Vec2 tan_half = fov_tangents(o, cam.width, cam.height);
+        cam.tan_half_x = tan_half.x;
+        cam.tan_half_y = tan_half.y;
         auto samplers = o.children_with_tag("sampler");
         if (samplers.size() > 1) throw err(o, "has more than one sampler");
         if (!samplers.empty()) {
@@ -1073,7 +1092,8 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,
               specular_reflectance; plus memory renewal|renewal_plus, step_correlation)
   emitters    area (radiance), point (position | to_world, intensity), spot (to_world,
-              intensity, cutoff_angle, beam_width, texture), directional
+              intensity, cutoff_angle, beam_width, texture), projector (to_world, irradiance (tex),
+              scale, fov | focal_length, fov_axis), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)
   sensor      perspective (fov + fov_axis x|y|diagonal|smaller|larger, or focal_length such as
@@ -1087,7 +1107,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. plastic,
 roughplastic, roughdielectric, thindielectric, principled, blendbsdf, bumpmap,
-normalmap, projector, instance/shapegroup,
+normalmap, instance/shapegroup,
 spectra from files or wavelength lists.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only

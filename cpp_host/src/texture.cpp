@@ -66,6 +66,7 @@ public:
         mean_ = texels_.values().empty() ? 0.0f : float(sum / double(texels_.values().size()));
     }
     float mean() const override { return mean_; }
+    std::pair<int, int> resolution() const override { return {w_, h_}; }
     Rgb eval(const Vec2& uv_in) const override {
         Vec2 uv = t_.apply(uv_in);
         float x = uv.x * float(w_), y = uv.y * float(h_);

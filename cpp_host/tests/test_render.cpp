@@ -18,6 +18,9 @@
 //  * Mask: seen against an environment of 1 a black masked sheet shows 1 - opacity; a diffuse
 //    plane under a directional light behind a mask gets rho E (1 - opacity) / pi in volpath
 //    (shadow rays pass with the transparency) and 0 in path (visibility blocked), exactly.
+//  * Projector: a diffuse plane at depth 1 facing it has radiance rho E inside the projected
+//    frame (Mitsuba's inverse-importance scaling), 0 outside; the frame's aspect is the
+//    bitmap's (4:2 here).
 //  * direct = path with max_depth 2 (bit-identical), moment(X) = X (bit-identical); refusals.
 //  * Default BSDF: an area light without <bsdf> reflects nothing (Mitsuba: black diffuse): exactly
 //    its radiance under an environment; a plain shape without one is diffuse 0.5.
@@ -552,6 +555,45 @@ TEST_CASE(mask_bsdf) {
     CHECK(checker->eval(Vec2(0.25f, 0.25f)).r == 1.0f && checker->eval_1(Vec2(0.25f, 0.25f)) == 0.0f);
     CHECK(make_mask(checker, make_diffuse(Rgb(0.5f)))->transparency(Vec2(0.25f, 0.25f)) == 1.0f);
     CHECK(make_mask(checker, make_diffuse(Rgb(0.5f)))->transparency(Vec2(0.75f, 0.25f)) == 0.0f);
+}
+
+TEST_CASE(projector_analytic) {
+    // Projector at the camera position (0, 0, 2) looking down at a diffuse plane (rho = 0.5) at
+    // depth 2, fov 40° along x, a 4x2 constant EXR of irradiance 0.3 (aspect 2: the frame's half
+    // extent at depth 2 is 2 tan 20° = 0.728 in x, 0.364 in y) and scale 2: radiance
+    // rho E scale / z² = 0.5 * 0.3 * 2 / 4 inside, 0 outside. Camera fov 60°, 32x32, box filter.
+    Image tex;
+    tex.width = 4;
+    tex.height = 2;
+    tex.rgb.assign(4 * 2 * 3, 0.3f);
+    write_exr(work("projector_tex.exr"), tex);
+    const std::string path = work("projector.xml"), out = work("projector_out.exr");
+    write_file(path, "<scene version=\"3.0.0\"><integrator type=\"direct\"/>" + camera(2.0f, 60.0f, 32, 32, 4) +
+                         R"(<shape type="rectangle"><transform name="to_world"><scale value="100"/></transform>
+                            <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+                            <emitter type="projector"><float name="fov" value="40"/><float name="scale" value="2"/>
+                            <texture name="irradiance" type="bitmap"><string name="filename" value="projector_tex.exr"/></texture>
+                            <transform name="to_world"><lookat origin="0, 0, 2" target="0, 0, 0" up="0, 1, 0"/></transform></emitter></scene>)");
+    CHECK(run({path, "-o", out, "--quiet"}) == 0);
+    Image img = read_exr(out);
+    const double inside = 0.5 * 0.3 * 2 / 4, tx = std::tan(30 * M_PI / 180) * 2, hx = 2 * std::tan(20 * M_PI / 180), hy = hx / 2;
+    int n_in = 0, n_out = 0;
+    for (int j = 0; j < 32; ++j)
+        for (int i = 0; i < 32; ++i) {
+            // the pixel's footprint on the plane (|x| and |y| ranges; the image is symmetric)
+            double x0 = std::fabs(tx * (2.0 * i / 32 - 1)), x1 = std::fabs(tx * (2.0 * (i + 1) / 32 - 1));
+            double y0 = std::fabs(tx * (2.0 * j / 32 - 1)), y1 = std::fabs(tx * (2.0 * (j + 1) / 32 - 1));
+            float v = img.rgb[3 * (size_t(j) * 32 + i)];
+            if (std::max(x0, x1) < hx && std::max(y0, y1) < hy) {
+                CHECK_NEAR(v, inside, 1e-5);
+                ++n_in;
+            } else if (std::min(x0, x1) > hx || std::min(y0, y1) > hy) {
+                CHECK(v == 0.0f);
+                ++n_out;
+            }
+        }
+    std::printf("  projector: %d pixels inside the frame (%.5f each), %d outside (0)\n", n_in, inside, n_out);
+    CHECK(n_in > 50 && n_out > 300);
 }
 
 TEST_MAIN()

@@ -14,9 +14,11 @@
 # Each scene is then one of:
 #   opens    --check succeeds (column 'stand-ins' says how many files were stood in for)
 #   refused  an unsupported plugin, parameter or element (listed: 'kind:plugin', 'plugin.parameter',
-#            '<element>' or '<element attribute=...>')
+#            '<element>' or '<element attribute=...>'), also naming data files of a format no
+#            stand-in exists for ('no stand-in for *.hdr')
 #   other    any other problem (the first message is shown)
-# Output: one tab-separated row per scene (scene, class, stand-ins, reasons), then the number of
+# Output: one tab-separated row per scene (scene, class, stand-ins this scene added to the copy --
+# later scenes reuse them --, reasons), then the number of
 # scenes refused for each reason, most frequent first. MFRENDER selects the binary (default:
 # build/release/cpp_host/mfrender, else the first mfrender on PATH).
 set -euo pipefail
@@ -188,7 +190,9 @@ for scene in scenes:
         m = unknown_param.search(line)
         if m: why.append('%s.%s' % (m.group(2), m.group(1))); continue
         m = unknown_elem.search(line)
-        if m: why.append('<%s>' % m.group(1) if m.group(1) else '<%s %s=...>' % (m.group(2), m.group(3)))
+        if m: why.append('<%s>' % m.group(1) if m.group(1) else '<%s %s=...>' % (m.group(2), m.group(3))); continue
+        m = missing_file.search(line)  # a data file no stand-in exists for (its format is not read)
+        if m: why.append('no stand-in for *%s' % os.path.splitext(m.group(1) or m.group(2))[1])
     if why:
         why = sorted(set(why))
         reasons.update(why)

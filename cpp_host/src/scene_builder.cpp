@@ -900,11 +900,13 @@ private:
     }
 
     void build_sensor(const SceneObject& o) {
-        if (o.type != "perspective") throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective)");
+        if (o.type != "perspective" && o.type != "orthographic")
+            throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective, orthographic)");
         Camera& cam = scene_->camera;
         cam.to_world = o.get_transform("to_world", Mat4());
+        cam.orthographic = o.type == "orthographic";
         // Mitsuba's perspective (pinhole) reads and ignores focus_distance (only thinlens uses it)
-        if (!(o.get_float("focus_distance", 1.0f) > 0)) throw perr(o, "focus_distance", "must be positive");
+        if (!cam.orthographic && !(o.get_float("focus_distance", 1.0f) > 0)) throw perr(o, "focus_distance", "must be positive");
         cam.near_clip = o.get_float("near_clip", 1e-2f);
         cam.far_clip = o.get_float("far_clip", 1e4f);
         if (!(cam.near_clip > 0 && cam.far_clip > cam.near_clip)) throw err(o, "needs 0 < near_clip < far_clip");
@@ -948,9 +950,11 @@ private:
             }
             f.check_all_used();
         }
-        const Vec2 tan_half = fov_tangents(o, cam.width, cam.height);
-        cam.tan_half_x = tan_half.x;
-        cam.tan_half_y = tan_half.y;
+        if (!cam.orthographic) {
+            const Vec2 tan_half = fov_tangents(o, cam.width, cam.height);
+            cam.tan_half_x = tan_half.x;
+            cam.tan_half_y = tan_half.y;
+        }
         auto samplers = o.children_with_tag("sampler");
         if (samplers.size() > 1) throw err(o, "has more than one sampler");
         if (!samplers.empty()) {
@@ -1098,7 +1102,9 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               envmap (filename: lat-long OpenEXR, scale, to_world)
   sensor      perspective (fov + fov_axis x|y|diagonal|smaller|larger, or focal_length such as
               "50mm" on 35 mm film (Mitsuba's default when neither is given), focus_distance
-              (read, no effect on a pinhole), to_world, near_clip, far_clip) with hdrfilm (width,
+              (read, no effect on a pinhole), to_world, near_clip, far_clip), orthographic (to_world
+              scales the window x in [-1, 1], y in [-1/aspect, 1/aspect]; near_clip, far_clip);
+              with hdrfilm (width,
               height, rfilter gaussian (stddev; the default, 0.5) | tent (radius) | box) and
               independent sampler (sample_count, seed)
   integrators volpath, path (max_depth, rr_depth, hide_emitters), direct (shading_samples,

@@ -21,6 +21,8 @@
 //  * Projector: a diffuse plane at depth 1 facing it has radiance rho E inside the projected
 //    frame (Mitsuba's inverse-importance scaling), 0 outside; the frame's aspect is the
 //    bitmap's (4:2 here).
+//  * Orthographic sensor: an emitting 0.6 x 0.4 rectangle fills exactly the pixels of its
+//    footprint in the window x in [-1, 1], y in [-1/aspect, 1/aspect] (32x16: aspect 2).
 //  * direct = path with max_depth 2 (bit-identical), moment(X) = X (bit-identical); refusals.
 //  * Default BSDF: an area light without <bsdf> reflects nothing (Mitsuba: black diffuse): exactly
 //    its radiance under an environment; a plain shape without one is diffuse 0.5.
@@ -594,6 +596,35 @@ TEST_CASE(projector_analytic) {
         }
     std::printf("  projector: %d pixels inside the frame (%.5f each), %d outside (0)\n", n_in, inside, n_out);
     CHECK(n_in > 50 && n_out > 300);
+}
+
+TEST_CASE(orthographic_sensor) {
+    const std::string path = work("ortho.xml"), out = work("ortho.exr");
+    write_file(path, R"(<scene version="3.0.0"><integrator type="path"/>
+        <sensor type="orthographic"><transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+          <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="16"/><rfilter type="box"/></film>
+          <sampler type="independent"><integer name="sample_count" value="4"/></sampler></sensor>
+        <shape type="rectangle"><transform name="to_world"><scale x="0.3" y="0.2"/></transform>
+          <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape></scene>)");
+    CHECK(run({path, "-o", out, "--quiet"}) == 0);
+    Image img = read_exr(out);
+    int lit = 0, dark = 0;
+    for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 32; ++i) {
+            // the pixel's window: x in [-1, 1] over 32 columns, y in [-0.5, 0.5] over 16 rows
+            double x0 = std::fabs(-1 + 2.0 * i / 32), x1 = std::fabs(-1 + 2.0 * (i + 1) / 32);
+            double y0 = std::fabs(-0.5 + 1.0 * j / 16), y1 = std::fabs(-0.5 + 1.0 * (j + 1) / 16);
+            float v = img.rgb[3 * (size_t(j) * 32 + i)];
+            if (std::max(x0, x1) < 0.3 && std::max(y0, y1) < 0.2) {
+                CHECK(v == 2.0f);
+                ++lit;
+            } else if (std::min(x0, x1) > 0.3 || std::min(y0, y1) > 0.2) {
+                CHECK(v == 0.0f);
+                ++dark;
+            }
+        }
+    std::printf("  orthographic: %d pixels inside the rectangle, %d outside\n", lit, dark);
+    CHECK(lit == 8 * 6 && dark > 400);  // 8 columns of 1/16 within |x| < 0.3, 6 rows of 1/16 within |y| < 0.2
 }
 
 TEST_MAIN()

@@ -155,6 +155,7 @@ missing_file = re.compile(r'refers to a missing file "([^"]+)"|spectrum file "([
 missing_dir = re.compile(r'<path>: folder "([^"]+)" not found')
 unsupported = re.compile(r'unsupported (\w+) plugin "([^"]+)"')
 unknown_param = re.compile(r'unknown parameter "([^"]+)" \(\w+\) for plugin "([^"]+)"')
+as_texture = re.compile(r'<\w+ type="([^"]+)"[^>]*>: parameter "(\w+)" as a texture is not supported')
 unknown_elem = re.compile(r'unknown element <(\w+)>|<(\w+)>: unexpected attribute "(\w+)"')
 located = re.compile(r'^mfrender: error: [^:]+:\d+: ')
 
@@ -189,6 +190,8 @@ for scene in scenes:
         if m: why.append('%s:%s' % (m.group(1), m.group(2))); continue
         m = unknown_param.search(line)
         if m: why.append('%s.%s' % (m.group(2), m.group(1))); continue
+        m = as_texture.search(line)
+        if m: why.append('%s.%s (texture)' % (m.group(1), m.group(2))); continue
         m = unknown_elem.search(line)
         if m: why.append('<%s>' % m.group(1) if m.group(1) else '<%s %s=...>' % (m.group(2), m.group(3))); continue
         m = missing_file.search(line)  # a data file no stand-in exists for (its format is not read)

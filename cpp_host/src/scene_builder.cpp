@@ -791,6 +791,8 @@ private:
         std::shared_ptr<Emitter> e;
         const std::string& t = o.type;
         if (t == "area") {
+            if (o.child_named("texture", "radiance"))
+                throw perr(o, "radiance", "as a texture is not supported (mfrender's area lights emit uniformly)");
             if (!o.has("radiance")) throw err(o, "missing required parameter \"radiance\"");
             e = std::make_shared<AreaEmitter>(shape, nonneg_rgb(o, "radiance", Rgb(1.0f)));
         } else if (t == "point") {

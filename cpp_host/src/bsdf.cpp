@@ -563,8 +563,29 @@ private:
     std::shared_ptr<Bsdf> f_, b_;
 };
 
+class Mask final : public Bsdf {
+public:
+    Mask(std::shared_ptr<const Texture> opacity, std::shared_ptr<Bsdf> nested) : opacity_(std::move(opacity)), nested_(std::move(nested)) {}
+    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override { return nested_->eval(uv, wo, wi); }
+    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override { return nested_->pdf(uv, wo, wi); }
+    bool sample(const Vec2& uv, const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
+        return nested_->sample(uv, wo, ul, u, s);
+    }
+    bool is_delta() const override { return nested_->is_delta(); }
+    // Mitsuba clamps the opacity to [0, 1]
+    float transparency(const Vec2& uv) const override { return 1.0f - std::clamp(opacity_->eval_1(uv), 0.0f, 1.0f); }
+    std::string name() const override { return "mask"; }
+
+private:
+    std::shared_ptr<const Texture> opacity_;
+    std::shared_ptr<Bsdf> nested_;
+};
+
 }  // namespace
 
+std::shared_ptr<Bsdf> make_mask(std::shared_ptr<const Texture> opacity, std::shared_ptr<Bsdf> nested) {
+    return std::make_shared<Mask>(std::move(opacity), std::move(nested));
+}
 std::shared_ptr<Bsdf> make_diffuse(const Rgb& r) { return std::make_shared<Diffuse>(make_constant_texture(r)); }
 std::shared_ptr<Bsdf> make_diffuse(std::shared_ptr<const Texture> r) { return std::make_shared<Diffuse>(std::move(r)); }
 std::shared_ptr<Bsdf> make_conductor(const ConductorIor& ior, std::shared_ptr<const Texture> s) {

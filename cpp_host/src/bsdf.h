@@ -39,6 +39,12 @@ public:
     virtual bool is_delta() const { return false; }
     /// The `null` BSDF: the surface only delimits media and is skipped by rays.
     virtual bool is_null() const { return false; }
+    /// Mitsuba's `mask`: the probability that the surface is absent at uv (1 - opacity). The
+    /// integrator decides presence first; eval, pdf and sample describe the surface when present.
+    virtual float transparency(const Vec2& uv) const {
+        (void)uv;
+        return 0.0f;
+    }
     virtual std::string name() const = 0;
 };
 
@@ -83,5 +89,8 @@ std::shared_ptr<Bsdf> make_rough_plastic(float int_ior, float ext_ior, std::shar
                                          float alpha, bool sample_visible);
 std::shared_ptr<Bsdf> make_null_bsdf();
 std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> front, std::shared_ptr<Bsdf> back);
+/// Mitsuba's mask: `nested` where present, absent with probability 1 - opacity (the texture's
+/// eval_1, clamped to [0, 1]).
+std::shared_ptr<Bsdf> make_mask(std::shared_ptr<const Texture> opacity, std::shared_ptr<Bsdf> nested);
 
 }  // namespace mf

@@ -264,11 +264,12 @@ int mfrender_main(int argc, char** argv) {
         std::unique_ptr<Scene> scene;
         if (parsed.root) scene = build_scene(parsed, bopts, &report, &problems);
         problems.raise();
+        for (const std::string& w : report.warnings) std::fprintf(stderr, "mfrender: warning: %s\n", w.c_str());
         if (check) {
             SceneSummary s = scene->summary();
             std::printf("%s: OK: %zu shapes (%zu triangles), %zu emitters, %zu media, %dx%d, %d spp, %s\n",
                         scene_path.c_str(), s.shapes, s.triangles, s.emitters, s.media, scene->camera.width,
-                        scene->camera.height, scene->spp, scene->integrator.volumetric ? "volpath" : "path");
+                        scene->camera.height, scene->spp, scene->integrator.name.c_str());
             for (const auto& u : report.macrofacet) {
                 std::printf("  %s medium <%s%s> on shape %s (%s) with %zu parameters:", u.role.c_str(), u.bag->type.c_str(),
                             u.bag->id.empty() ? "" : (" id=" + u.bag->id).c_str(),

@@ -92,15 +92,67 @@ float AreaEmitter::pdf_surface(const Vec3& ref, const SurfaceHit& hit) const {
     return dist2 / (cos_l * shape_->surface_area());
 }
 
-bool PointEmitter::sample_li(const Vec3& ref, const Vec2&, EmitterSample* s) const {
-    Vec3 d = p_ - ref;
+namespace {
+/// The direction and distance from `ref` to a point light at `p` (pdf 1, delta); Li is set to
+/// the intensity `I` over the squared distance. False when ref coincides with p.
+bool sample_point_light(const Vec3& p, const Rgb& I, const Vec3& ref, EmitterSample* s) {
+    Vec3 d = p - ref;
     float dist2 = length_sq(d);
     if (!(dist2 > 0)) return false;
     s->dist = std::sqrt(dist2);
     s->wi = d / s->dist;
-    s->Li = I_ / dist2;
+    s->Li = I / dist2;
     s->pdf = 1.0f;
     s->delta = true;
+    return true;
+}
+}  // namespace
+
+bool PointEmitter::sample_li(const Vec3& ref, const Vec2&, EmitterSample* s) const {
+    return sample_point_light(p_, I_, ref, s);
+}
+
+SpotEmitter::SpotEmitter(const Mat4& to_world, const Rgb& intensity, float cutoff_angle, float beam_width,
+                         std::shared_ptr<const Texture> texture)
+    : to_world_(to_world), to_local_(to_world.inverse()), p_(to_world.point(Vec3(0.0f))), I_(intensity),
+      cutoff_(cutoff_angle), cos_cutoff_(std::cos(cutoff_angle)), cos_beam_(std::cos(beam_width)),
+      // beam_width == cutoff_angle: no ramp (the ramp branch is never reached, see falloff)
+      inv_transition_(cutoff_angle > beam_width ? 1.0f / (cutoff_angle - beam_width) : 0.0f),
+      uv_factor_(std::tan(cutoff_angle)), texture_(std::move(texture)) {}
+
+float SpotEmitter::falloff(const Vec3& local_d) const {
+    float cos_theta = normalize(local_d).z;
+    if (!(cos_theta > cos_cutoff_)) return 0.0f;
+    if (cos_theta >= cos_beam_) return 1.0f;
+    return (cutoff_ - std::acos(std::min(cos_theta, 1.0f))) * inv_transition_;
+}
+
+bool SpotEmitter::sample_li(const Vec3& ref, const Vec2&, EmitterSample* s) const {
+    if (!sample_point_light(p_, I_, ref, s)) return false;
+    Vec3 local = to_local_.vector(-s->wi);
+    float f = falloff(local);
+    if (!(f > 0)) return false;
+    if (texture_) {
+        Vec3 l = normalize(local);
+        s->Li = s->Li * texture_->eval(Vec2(0.5f + 0.5f * l.x / (l.z * uv_factor_), 0.5f + 0.5f * l.y / (l.z * uv_factor_)));
+    }
+    s->Li = s->Li * f;
+    return true;
+}
+
+ProjectorEmitter::ProjectorEmitter(const Mat4& to_world, const Vec2& tan_half, std::shared_ptr<const Texture> irradiance, float scale)
+    : to_world_(to_world), to_local_(to_world.inverse()), p_(to_world.point(Vec3(0.0f))), axis_(to_world.vector(Vec3(0, 0, 1))),
+      tan_half_(tan_half), irradiance_(std::move(irradiance)), scale_(scale) {}
+
+bool ProjectorEmitter::sample_li(const Vec3& ref, const Vec2&, EmitterSample* s) const {
+    const Vec3 local = to_local_.point(ref);
+    if (!(local.z > 0)) return false;
+    const Vec2 uv(0.5f - 0.5f * local.x / (local.z * tan_half_.x), 0.5f - 0.5f * local.y / (local.z * tan_half_.y));
+    if (!(uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1)) return false;
+    if (!sample_point_light(p_, Rgb(1.0f), ref, s)) return false;
+    const float cos_theta = -dot(axis_, s->wi);
+    if (!(cos_theta > 0)) return false;
+    s->Li = irradiance_->eval(uv) * (kPi * scale_ / (local.z * local.z * cos_theta));
     return true;
 }
 

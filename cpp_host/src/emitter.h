@@ -1,4 +1,4 @@
-// mfhost — emitters: area, point, directional, constant, envmap.
+// mfhost — emitters: area, point, spot, projector, directional, constant, envmap.
 #pragma once
 
 #include <memory>
@@ -7,6 +7,7 @@
 
 #include "math.h"
 #include "shape.h"
+#include "texture.h"
 
 namespace mf {
 
@@ -77,6 +78,48 @@ public:
 private:
     Vec3 p_;
     Rgb I_;
+};
+
+/// Mitsuba 3's `spot`: a point light at to_world's origin shining along its local +z, with
+/// intensity I (W/sr) inside beam_width, ramping linearly in angle to 0 at cutoff_angle, and an
+/// optional texture projected over the cone (uv = 1/2 + (x, y) / (2 z tan(cutoff_angle))).
+class SpotEmitter final : public Emitter {
+public:
+    /// Angles in radians; `texture` may be null (no projected texture).
+    SpotEmitter(const Mat4& to_world, const Rgb& intensity, float cutoff_angle, float beam_width,
+                std::shared_ptr<const Texture> texture);
+    bool sample_li(const Vec3& ref, const Vec2& u, EmitterSample* s) const override;
+    bool is_delta() const override { return true; }
+    std::string name() const override { return "spot"; }
+    /// The falloff factor in [0, 1] for a local direction (not necessarily unit).
+    float falloff(const Vec3& local_d) const;
+
+private:
+    Mat4 to_world_, to_local_;
+    Vec3 p_;
+    Rgb I_;
+    float cutoff_, cos_cutoff_, cos_beam_, inv_transition_, uv_factor_;
+    std::shared_ptr<const Texture> texture_;
+};
+
+/// Mitsuba 3's `projector`: the reciprocal of a perspective sensor at to_world's origin looking
+/// along local +z; `irradiance` is the irradiance on its image plane at z = 1 (uv as Mitsuba's
+/// camera: u = 1/2 - x / (2 z tan_x), v = 1/2 - y / (2 z tan_y)), times `scale`. A point at local
+/// depth z in direction cos θ from the axis receives pi E(uv) scale / (z² cos θ) -- Mitsuba's
+/// inverse-importance factor, so that a plane facing the projector at z = 1 gets E.
+class ProjectorEmitter final : public Emitter {
+public:
+    ProjectorEmitter(const Mat4& to_world, const Vec2& tan_half, std::shared_ptr<const Texture> irradiance, float scale);
+    bool sample_li(const Vec3& ref, const Vec2& u, EmitterSample* s) const override;
+    bool is_delta() const override { return true; }
+    std::string name() const override { return "projector"; }
+
+private:
+    Mat4 to_world_, to_local_;
+    Vec3 p_, axis_;  // axis_: to_world applied to local +z (not normalised, as Mitsuba's ds.n)
+    Vec2 tan_half_;
+    std::shared_ptr<const Texture> irradiance_;
+    float scale_;
 };
 
 class DirectionalEmitter final : public Emitter {

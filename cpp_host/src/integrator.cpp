@@ -21,7 +21,14 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
             if (T.is_black()) return T;
         }
         if (!hit) return T;
-        if (!h.shape->bsdf->is_null()) return Rgb(0.0f);
+        if (!h.shape->bsdf->is_null()) {
+            // Mitsuba's volpath sees through a mask with its transparency (eval_null_transmission);
+            // its path tests visibility, which any surface blocks (the mask's null events are
+            // Dirac then: emitters reached through it count fully, see Li)
+            const float pass = vol ? h.shape->bsdf->transparency(h.uv) : 0.0f;
+            if (!(pass > 0)) return Rgb(0.0f);
+            T *= pass;
+        }
         if (h.shape->is_medium_transition()) medium = h.shape->target_medium(h.ng, d);
         o = offset_ray_origin(h.p, h.ng, d);
         if (std::isfinite(dist)) {
@@ -167,7 +174,19 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         }
 
         const Bsdf& bsdf = *shape->bsdf;
-        if (bsdf.is_null()) {
+        const float pass = bsdf.transparency(hit.uv);
+        const bool absent = pass > 0 && sampler.next_1d() < pass;  // a mask's hole (Mitsuba's null lobe)
+        if (absent && !vol) {
+            // Mitsuba's path: the mask's absence is a Dirac null event and a bounce of the path
+            if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
+            prev_delta = true;
+            prev_p = hit.p;
+            ray = Ray(offset_ray_origin(hit.p, hit.ng, ray.d), ray.d);
+            ++depth;
+            if (!russian_roulette()) break;
+            continue;
+        }
+        if (bsdf.is_null() || absent) {
             // index-matched interface: continue straight, possibly into another medium
             if (++null_crossings > kMaxNullCrossings) break;
             if (vol && shape->is_medium_transition()) medium = shape->target_medium(hit.ng, ray.d);

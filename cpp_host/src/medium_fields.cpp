@@ -49,7 +49,9 @@ VolumeSpec parse_volume(const SceneObject& o, VolumeFileCache& files) {
     VolumeSpec v;
     v.obj = &o;
     if (o.type == "constvolume") {
-        o.get_transform("to_world", Mat4());  // accepted, as Mitsuba: a constant has no position
+        // a constant has no position; to_world places only its box (Mitsuba's Volume::bbox, the
+        // extent of a heterogeneous medium)
+        v.to_world = o.get_transform("to_world", Mat4());
         v.value = o.find("value");
         if (v.value) {
             v.value->used = true;
@@ -197,17 +199,17 @@ std::shared_ptr<const Field> build_anisotropy(const VolumeSpec* full, const Volu
     return std::make_shared<Field>(full ? "anisotropy" : "anisotropy", origin.obj->loc, origin.obj->describe(), vol);
 }
 
-/// A grid volume of a non-matrix parameter: 1-channel data broadcast to 3 where it takes 3.
-std::shared_ptr<const Volume> grid_volume_for(const VolumeSpec& v, const VaryingParam& p) {
+/// A grid volume of `channels` (1 or 3) channels: 1-channel data broadcast to 3 where 3 are taken.
+std::shared_ptr<const Volume> grid_volume_for(const VolumeSpec& v, int channels) {
     const VolumeGridData& g = *v.data;
     std::vector<float> values;
-    if (p.channels == 3 && g.channels == 1) {
+    if (channels == 3 && g.channels == 1) {
         values.resize(g.values.size() * 3);
         for (size_t i = 0; i < g.values.size(); ++i) values[3 * i] = values[3 * i + 1] = values[3 * i + 2] = g.values[i];
     } else {
         values = g.values;
     }
-    return make_grid_volume(SampleGrid(std::move(values), g.nx, g.ny, g.nz, p.channels), p.channels, v.to_world, v.filter, v.wrap);
+    return make_grid_volume(SampleGrid(std::move(values), g.nx, g.ny, g.nz, channels), channels, v.to_world, v.filter, v.wrap);
 }
 
 /// The bag entry of a constvolume with a scalar form: the `value` property as written.
@@ -245,6 +247,30 @@ void check_volume_element(const SceneObject& o, VolumeFileCache& files) {
         if (!std::isfinite(v.data->values[i]))
             throw Error(o.loc, o.describe() + ": " + voxel_str(*v.data, i / size_t(v.data->channels)) + " is not finite (file " +
                                    quote(v.path, 200) + ")");
+}
+
+std::shared_ptr<const Volume> build_rgb_volume(const SceneObject& o, VolumeFileCache& files, float max_value, Aabb* world_box) {
+    VolumeSpec v = parse_volume(o, files);
+    if (v.channels() != 1 && v.channels() != 3)
+        throw Error(o.loc, o.describe() + ": has " + std::to_string(v.channels()) + " channels; 1 or 3 are needed here");
+    auto bad = [&](const std::string& where, float x) {
+        return Error(o.loc, o.describe() + ": " + where + " is " + number_str(x) + ", outside [0, " + number_str(max_value) + "]" +
+                                (v.path.empty() ? std::string() : " (file " + quote(v.path, 200) + ")"));
+    };
+    *world_box = Aabb();
+    for (int c = 0; c < 8; ++c) world_box->expand(v.to_world.point(Vec3(float(c & 1), float((c >> 1) & 1), float((c >> 2) & 1))));
+    if (v.constant()) {
+        float value[3];
+        for (int c = 0; c < 3; ++c) {
+            value[c] = v.component(v.channels() == 3 ? c : 0);
+            if (!(value[c] >= 0 && value[c] <= max_value)) throw bad("the value", value[c]);
+        }
+        return make_constant_volume(value, 3, 3);
+    }
+    for (size_t i = 0; i < v.data->values.size(); ++i)
+        if (!(v.data->values[i] >= 0 && v.data->values[i] <= max_value))
+            throw bad(voxel_str(*v.data, i / size_t(v.data->channels)), v.data->values[i]);
+    return grid_volume_for(v, 3);
 }
 
 std::shared_ptr<const MediumFields> build_medium_fields(const SceneObject& medium, MediumParamBag* bag, VolumeFileCache& files,
@@ -306,7 +332,7 @@ std::shared_ptr<const MediumFields> build_medium_fields(const SceneObject& mediu
                 bag->params.emplace_back(c.name, folded_value(v, *p));
                 continue;
             }
-            fields->fields.push_back(std::make_shared<Field>(c.name, o.loc, o.describe(), grid_volume_for(v, *p)));
+            fields->fields.push_back(std::make_shared<Field>(c.name, o.loc, o.describe(), grid_volume_for(v, p->channels)));
         } catch (const Error& e) {
             errors.add(e);
         }

@@ -61,6 +61,11 @@ using TextureBuilder = std::function<std::shared_ptr<const Texture>(const SceneO
 std::shared_ptr<const MediumFields> build_medium_fields(const SceneObject& medium, MediumParamBag* bag,
                                                         VolumeFileCache& files, const TextureBuilder& build_texture);
 
+/// A <volume> (constvolume or gridvolume) as Mitsuba's media read sigma_t and albedo: 3 channels
+/// (1-channel data as grey), every value finite and in [0, max_value]. *world_box receives the
+/// box of the unit cube under its to_world (Mitsuba's Volume::bbox, a constvolume's too).
+std::shared_ptr<const Volume> build_rgb_volume(const SceneObject& o, VolumeFileCache& files, float max_value, Aabb* world_box);
+
 /// Builds a top-level <volume id="..."> element once to report its problems (its values are
 /// checked for finiteness only; the parameter it is used for checks the rest).
 void check_volume_element(const SceneObject& o, VolumeFileCache& files);

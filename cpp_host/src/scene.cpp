@@ -9,6 +9,11 @@ namespace mf {
 
 Ray Camera::generate_ray(float fx, float fy) const {
     float sx = fx / float(width), sy = fy / float(height);
+    if (orthographic) {
+        Vec3 o = to_world.point(Vec3(1.0f - 2.0f * sx, (1.0f - 2.0f * sy) * float(height) / float(width), near_clip));
+        Vec3 z = to_world.vector(Vec3(0, 0, 1));
+        return Ray(o, normalize(z), 0.0f, (far_clip - near_clip) * length(z));
+    }
     // Mitsuba: image x grows to the right = local -x; image y grows downwards = local -y.
     Vec3 d_local((1.0f - 2.0f * sx) * tan_half_x, (1.0f - 2.0f * sy) * tan_half_y, 1.0f);
     float inv_z = 1.0f / length(d_local);

@@ -15,9 +15,12 @@
 namespace mf {
 
 /// Mitsuba `perspective` sensor: local frame looks down +z with +x to the left of the image
-/// and +y up; fov measured along fov_axis (x, y, diagonal, smaller, larger).
+/// and +y up; fov measured along fov_axis (x, y, diagonal, smaller, larger). Mitsuba's
+/// `orthographic` (orthographic = true): parallel rays along local +z from the near plane over
+/// x in [-1, 1], y in [-1/aspect, 1/aspect] (to_world scales that window).
 struct Camera {
     Mat4 to_world;
+    bool orthographic = false;
     float tan_half_x = 0.5f, tan_half_y = 0.5f;
     float near_clip = 1e-2f, far_clip = 1e4f;
     int width = 768, height = 576;
@@ -32,7 +35,8 @@ struct Camera {
 enum class LightSampling { Mis, BsdfOnly, EmitterOnly };
 
 struct IntegratorSettings {
-    bool volumetric = true;  // volpath (media) or path (media ignored)
+    std::string name = "path";  // the XML plugin: volpath, path or direct (path with max_depth 2)
+    bool volumetric = true;  // volpath (media) or path and direct (media ignored)
     int max_depth = -1;      // -1 = unbounded
     int rr_depth = 5;
     bool hide_emitters = false;

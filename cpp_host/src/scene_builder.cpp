@@ -13,6 +13,7 @@
 #include "library_abi.h"
 #include "mean_surface.h"
 #include "medium_gpis.h"
+#include "medium_heterogeneous.h"
 #include "medium_fields.h"
 #include "medium_macrofacet.h"
 #include "sdf_grid.h"
@@ -57,7 +58,7 @@ public:
         try {
             if (sensor) build_sensor(*sensor);
             if (integrator) build_integrator(*integrator);
-            else scene_->integrator = IntegratorSettings{false, -1, 5, false};  // Mitsuba's default: path
+            else scene_->integrator = IntegratorSettings{"path", false, -1, 5, false};  // Mitsuba's default: path
         } catch (const AlreadyReported&) {
         } catch (const Error& e) {
             errors.add(e);
@@ -206,10 +207,18 @@ private:
             std::shared_ptr<Bsdf> f = build_bsdf(*kids[0]->obj);
             std::shared_ptr<Bsdf> bk = kids.size() == 2 ? build_bsdf(*kids[1]->obj) : f;
             if (f->is_null() || bk->is_null()) throw err(o, "a null BSDF cannot be made two-sided");
+            if (f->name() == "mask" || bk->name() == "mask")
+                throw err(o, "a mask inside twosided is not supported: make the mask the outer BSDF (mask of twosided)");
             b = make_twosided(f, bk);
+        } else if (t == "mask") {
+            auto kids = o.children_with_tag("bsdf");
+            if (kids.size() != 1) throw err(o, "expects one nested <bsdf>");
+            std::shared_ptr<Bsdf> nested = build_bsdf(*kids[0]->obj);
+            if (nested->is_null() || nested->name() == "mask") throw err(o, "the nested BSDF of a mask cannot be null or a mask");
+            b = make_mask(texture_param(o, "opacity", Rgb(0.5f)), nested);
         } else {
             throw err(o, "unsupported BSDF plugin \"" + t +
-                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided)");
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided, mask)");
         }
         o.check_all_used();
         bsdfs_[&o] = b;
@@ -483,22 +492,64 @@ private:
         auto it = media_.find(&o);
         if (it != media_.end()) return it->second;
         skip_if_broken(o);
+        if (o.type == "heterogeneous") {
+            auto m = build_heterogeneous(o);
+            media_[&o] = m;
+            return m;
+        }
         if (o.type != "homogeneous")
-            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, macrofacet, gpis)");
+            throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, heterogeneous, macrofacet, gpis)");
         Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
         Rgb albedo = nonneg_rgb(o, "albedo", Rgb(0.75f));
         if (albedo.max() > 1.0f) throw perr(o, "albedo", "must lie in [0, 1]");
         float scale = o.get_float("scale", 1.0f);
         if (!(scale >= 0)) throw perr(o, "scale", "must be non-negative");
         o.get_bool("sample_emitters", true);  // accepted; next-event estimation is always used
-        auto phases = o.children_with_tag("phase");
-        if (phases.size() > 1) throw err(o, "expects at most one nested <phase>");
-        std::shared_ptr<PhaseFunction> ph =
-            phases.empty() ? std::make_shared<IsotropicPhase>() : build_phase(*phases[0]->obj);
+        std::shared_ptr<PhaseFunction> ph = medium_phase(o);
         o.check_all_used();
         auto m = std::make_shared<HomogeneousMedium>(sigma_t * scale, albedo, ph);
         media_[&o] = m;
         return m;
+    }
+
+    /// The nested <phase> of a medium (isotropic without one).
+    std::shared_ptr<PhaseFunction> medium_phase(const SceneObject& o) {
+        auto phases = o.children_with_tag("phase");
+        if (phases.size() > 1) throw err(o, "expects at most one nested <phase>");
+        return phases.empty() ? std::make_shared<IsotropicPhase>() : build_phase(*phases[0]->obj);
+    }
+
+    /// A volume parameter of a medium as Mitsuba's props.volume() reads it: a nested or referenced
+    /// <volume>, or a constant (a constvolume with its default box, the unit cube).
+    std::shared_ptr<const Volume> medium_volume(const SceneObject& o, const std::string& name, float def, float max_value,
+                                                Aabb* box) {
+        const Child* c = o.child_named("volume", name);
+        if (c && o.has(name)) throw err(o, "parameter " + quote(name) + " is given twice (a value and a volume)");
+        if (c) {
+            skip_if_broken(*c->obj);
+            return build_rgb_volume(*c->obj, volume_files_, max_value, box);
+        }
+        Rgb v = nonneg_rgb(o, name, Rgb(def));
+        if (v.max() > max_value) throw perr(o, name, "must lie in [0, " + number_str(max_value) + "]");
+        *box = Aabb();
+        box->expand(Vec3(0.0f));
+        box->expand(Vec3(1.0f));
+        const float value[3] = {v.r, v.g, v.b};
+        return make_constant_volume(value, 3, 3);
+    }
+
+    std::shared_ptr<const Medium> build_heterogeneous(const SceneObject& o) {
+        Aabb box, albedo_box;
+        auto sigma_t = medium_volume(o, "sigma_t", 1.0f, kInf, &box);
+        auto albedo = medium_volume(o, "albedo", 0.75f, 1.0f, &albedo_box);
+        float scale = o.get_float("scale", 1.0f);
+        if (!(scale >= 0 && std::isfinite(scale))) throw perr(o, "scale", "must be finite and non-negative");
+        o.get_bool("sample_emitters", true);  // accepted; next-event estimation is always used
+        if (!o.get_bool("has_spectral_extinction", true))
+            throw perr(o, "has_spectral_extinction", "false is not supported (mfrender tracks RGB extinction)");
+        std::shared_ptr<PhaseFunction> ph = medium_phase(o);
+        o.check_all_used();
+        return std::make_shared<HeterogeneousMedium>(sigma_t, scale, albedo, box, ph);
     }
 
     // ------------------------------------------------------------------ shapes
@@ -740,6 +791,8 @@ private:
         std::shared_ptr<Emitter> e;
         const std::string& t = o.type;
         if (t == "area") {
+            if (o.child_named("texture", "radiance"))
+                throw perr(o, "radiance", "as a texture is not supported (mfrender's area lights emit uniformly)");
             if (!o.has("radiance")) throw err(o, "missing required parameter \"radiance\"");
             e = std::make_shared<AreaEmitter>(shape, nonneg_rgb(o, "radiance", Rgb(1.0f)));
         } else if (t == "point") {
@@ -748,6 +801,31 @@ private:
             if (o.has("position")) p = o.get_point("position", p);
             else p = o.get_transform("to_world", Mat4()).point(Vec3(0.0f));
             e = std::make_shared<PointEmitter>(p, nonneg_rgb(o, "intensity", Rgb(1.0f)));
+        } else if (t == "spot") {
+            // Mitsuba's spot: intensity is a constant, texture (optional) must vary over uv
+            if (o.child_named("texture", "intensity")) throw perr(o, "intensity", "cannot be spatially varying (as in Mitsuba)");
+            if (o.has("texture")) throw perr(o, "texture", "must be a spatially varying texture (as in Mitsuba)");
+            std::shared_ptr<const Texture> tex;
+            if (const Child* c = o.child_named("texture", "texture")) tex = build_texture(*c->obj);
+            float cutoff = o.get_float("cutoff_angle", 20.0f);
+            float beam = o.get_float("beam_width", cutoff * 0.75f);
+            // Mitsuba projects the texture with tan(cutoff_angle): the cone must stay in front
+            float max_cutoff = tex ? 90.0f : 180.0f;
+            if (!(cutoff > 0 && cutoff < max_cutoff))
+                throw perr(o, "cutoff_angle", tex ? "must lie in (0, 90) degrees with a texture" : "must lie in (0, 180) degrees");
+            if (!(beam >= 0 && beam <= cutoff)) throw perr(o, "beam_width", "must lie in [0, cutoff_angle] degrees");
+            const float deg = kPi / 180.0f;
+            e = std::make_shared<SpotEmitter>(o.get_transform("to_world", Mat4()), nonneg_rgb(o, "intensity", Rgb(1.0f)),
+                                              cutoff * deg, beam * deg, tex);
+        } else if (t == "projector") {
+            // Mitsuba's projector: the perspective sensor's mapping, the image's aspect from the
+            // irradiance texture's resolution (1 x 1 for a constant)
+            auto irradiance = texture_param(o, "irradiance", Rgb(1.0f));
+            auto res = irradiance->resolution();
+            float scale = o.get_float("scale", 1.0f);
+            if (!(scale >= 0 && std::isfinite(scale))) throw perr(o, "scale", "must be finite and non-negative");
+            e = std::make_shared<ProjectorEmitter>(o.get_transform("to_world", Mat4()), fov_tangents(o, res.first, res.second),
+                                                   irradiance, scale);
         } else if (t == "directional") {
             Vec3 d(0, 0, 1);
             if (o.has("direction") && o.has("to_world")) throw err(o, "specify either direction or to_world, not both");
@@ -772,17 +850,16 @@ private:
                 if (v < 0) throw err(o, "environment map \"" + path + "\" has negative pixel values");
             e = std::make_shared<EnvmapEmitter>(std::move(img.rgb), img.width, img.height, scale, tw);
         } else {
-            throw err(o, "unsupported emitter plugin \"" + t + "\" (supported: area, point, directional, constant, envmap)");
+            throw err(o, "unsupported emitter plugin \"" + t + "\" (supported: area, point, spot, projector, directional, constant, envmap)");
         }
         o.check_all_used();
         return e;
     }
 
     // ------------------------------------------------------------------ sensor & integrator
-    void build_sensor(const SceneObject& o) {
-        if (o.type != "perspective") throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective)");
-        Camera& cam = scene_->camera;
-        cam.to_world = o.get_transform("to_world", Mat4());
+    /// Mitsuba's parse_fov for a perspective sensor (or projector) whose image is width x height:
+    /// the tangents of the half field of view along x and y.
+    Vec2 fov_tangents(const SceneObject& o, int width, int height) {
         // Mitsuba's parse_fov: fov along fov_axis, or a focal length on 35 mm film (36 x 24 mm),
         // i.e. a diagonal fov of 2 atan(sqrt(36^2 + 24^2) / (2 f)); default focal_length 50mm.
         if (o.has("fov") && o.has("focal_length")) throw err(o, "specify either fov or focal_length, not both");
@@ -803,8 +880,35 @@ private:
             axis = "diagonal";
             if (o.has("fov_axis")) o.get_string("fov_axis", "x");  // Mitsuba ignores it with focal_length
         }
+        Vec2 tan_half;
+        float aspect = float(width) / float(height);
+        float t = std::tan(0.5f * fov * kPi / 180.0f);
+        if (axis == "smaller") axis = width <= height ? "x" : "y";
+        if (axis == "larger") axis = width >= height ? "x" : "y";
+        if (axis == "x") {
+            tan_half.x = t;
+            tan_half.y = t / aspect;
+        } else if (axis == "y") {
+            tan_half.y = t;
+            tan_half.x = t * aspect;
+        } else if (axis == "diagonal") {
+            float diag = std::sqrt(aspect * aspect + 1.0f);
+            tan_half.x = t * aspect / diag;
+            tan_half.y = t / diag;
+        } else {
+            throw perr(o, "fov_axis", "must be x, y, diagonal, smaller or larger");
+        }
+        return tan_half;
+    }
+
+    void build_sensor(const SceneObject& o) {
+        if (o.type != "perspective" && o.type != "orthographic")
+            throw err(o, "unsupported sensor plugin \"" + o.type + "\" (supported: perspective, orthographic)");
+        Camera& cam = scene_->camera;
+        cam.to_world = o.get_transform("to_world", Mat4());
+        cam.orthographic = o.type == "orthographic";
         // Mitsuba's perspective (pinhole) reads and ignores focus_distance (only thinlens uses it)
-        if (!(o.get_float("focus_distance", 1.0f) > 0)) throw perr(o, "focus_distance", "must be positive");
+        if (!cam.orthographic && !(o.get_float("focus_distance", 1.0f) > 0)) throw perr(o, "focus_distance", "must be positive");
         cam.near_clip = o.get_float("near_clip", 1e-2f);
         cam.far_clip = o.get_float("far_clip", 1e4f);
         if (!(cam.near_clip > 0 && cam.far_clip > cam.near_clip)) throw err(o, "needs 0 < near_clip < far_clip");
@@ -848,22 +952,10 @@ private:
             }
             f.check_all_used();
         }
-        float aspect = float(cam.width) / float(cam.height);
-        float t = std::tan(0.5f * fov * kPi / 180.0f);
-        if (axis == "smaller") axis = cam.width <= cam.height ? "x" : "y";
-        if (axis == "larger") axis = cam.width >= cam.height ? "x" : "y";
-        if (axis == "x") {
-            cam.tan_half_x = t;
-            cam.tan_half_y = t / aspect;
-        } else if (axis == "y") {
-            cam.tan_half_y = t;
-            cam.tan_half_x = t * aspect;
-        } else if (axis == "diagonal") {
-            float diag = std::sqrt(aspect * aspect + 1.0f);
-            cam.tan_half_x = t * aspect / diag;
-            cam.tan_half_y = t / diag;
-        } else {
-            throw perr(o, "fov_axis", "must be x, y, diagonal, smaller or larger");
+        if (!cam.orthographic) {
+            const Vec2 tan_half = fov_tangents(o, cam.width, cam.height);
+            cam.tan_half_x = tan_half.x;
+            cam.tan_half_y = tan_half.y;
         }
         auto samplers = o.children_with_tag("sampler");
         if (samplers.size() > 1) throw err(o, "has more than one sampler");
@@ -891,10 +983,44 @@ private:
     }
 
     void build_integrator(const SceneObject& o) {
+        if (o.type == "moment") {
+            // Mitsuba's moment renders its nested integrator(s) and writes, after the R, G, B of
+            // the (first) nested image, each image and its per-pixel second moment as AOVs.
+            auto nested = o.children_with_tag("integrator");
+            if (nested.size() != 1) throw err(o, "needs exactly one nested <integrator> (mfrender renders one image)");
+            o.check_all_used();
+            const SceneObject& inner = *nested[0]->obj;
+            skip_if_broken(inner);
+            build_integrator(inner);
+            if (report_)
+                report_->warnings.push_back(o.loc.str() + ": " + o.describe() + ": writing the R, G, B image of the nested " +
+                                            inner.describe() + "; the moment AOV channels are not written");
+            return;
+        }
         IntegratorSettings s;
+        s.name = o.type;
+        if (o.type == "direct") {
+            // Mitsuba's direct: emission seen directly plus one bounce of direct light from
+            // emitter_samples and bsdf_samples (shading_samples sets both), combined by MIS and
+            // ignoring media -- the path estimator with max_depth 2. mfrender takes one sample of
+            // each strategy (0 leaves it out): the same image in expectation, not the same noise.
+            long long shading = o.get_int("shading_samples", 1);
+            long long n_em = o.get_int("emitter_samples", shading), n_bsdf = o.get_int("bsdf_samples", shading);
+            for (const char* name : {"shading_samples", "emitter_samples", "bsdf_samples"})
+                if (o.has(name) && !(o.get_int(name, 1) == 0 || o.get_int(name, 1) == 1))
+                    throw perr(o, name, "must be 0 or 1 in mfrender (more samples per bounce are not supported)");
+            if (n_em == 0 && n_bsdf == 0) throw err(o, "emitter_samples and bsdf_samples are both 0 (nothing to render)");
+            s.volumetric = false;
+            s.max_depth = 2;
+            s.light_sampling = n_em == 0 ? LightSampling::BsdfOnly : n_bsdf == 0 ? LightSampling::EmitterOnly : LightSampling::Mis;
+            s.hide_emitters = o.get_bool("hide_emitters", false);
+            o.check_all_used();
+            scene_->integrator = s;
+            return;
+        }
         if (o.type == "volpath") s.volumetric = true;
         else if (o.type == "path") s.volumetric = false;
-        else throw err(o, "unsupported integrator plugin \"" + o.type + "\" (supported: volpath, path)");
+        else throw err(o, "unsupported integrator plugin \"" + o.type + "\" (supported: volpath, path, direct, moment)");
         long long md = o.get_int("max_depth", -1);
         if (md < -1) throw perr(o, "max_depth", "must be -1 (unbounded) or >= 0");
         long long rr = o.get_int("rr_depth", 5);
@@ -927,7 +1053,8 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               including file's folder, the working directory), id="..." and <ref id>/<ref name id>
               (forward references too), <alias id as>
   properties  integer float boolean string rgb vector point transform
-              spectrum (a single constant value -> grey RGB; wavelength lists are refused)
+              spectrum (a constant, wavelength:value lists or a .spd file, converted to linear sRGB
+              as Mitsuba 3's RGB variants do: CIE 1931 and D65 for reflectances, Y-normalised emission)
               <rgb> outside emitters must lie in [0, 1] (Mitsuba's RGB variants refuse it) except
               eta, k, int_ior, ext_ior: use <float> or rgb with a scale (e.g. sigma_t)
   transforms  translate, rotate (axis as given, like Mitsuba: a non-unit axis also scales), scale,
@@ -955,9 +1082,11 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               alpha | alpha_u,alpha_v, sample_visible), plastic, roughplastic (int_ior, ext_ior,
               diffuse_reflectance (tex), specular_reflectance ((tex) when rough), nonlinear;
               rough: distribution, isotropic alpha, sample_visible), null, twosided (one or two
-              bsdfs)
+              bsdfs), mask (opacity (tex), one nested bsdf: absent with probability 1 - opacity)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
+              heterogeneous (sigma_t, albedo: constants or <volume> constvolume | gridvolume;
+              scale; phase; the medium fills the box of sigma_t's volume, as in Mitsuba)
               macrofacet (as the interior of its mean-surface shape; the library's parameter
               names, whose types, ranges and defaults README.md "Medium parameters" lists:
               sigma | variance, shell_extent, distribution, alpha, alpha_u/v/z, lengthscale*,
@@ -974,19 +1103,24 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               shape; of README.md "Medium parameters": sigma | variance, shell_extent,
               distribution gpss|beckmann, alpha*, lengthscale*, material | eta,k,
               specular_reflectance, memory renewal|renewal_plus, step_correlation)
-  emitters    area (radiance), point (position | to_world, intensity), directional
+  emitters    area (radiance), point (position | to_world, intensity), spot (to_world,
+              intensity, cutoff_angle, beam_width, texture), projector (to_world, irradiance (tex),
+              scale, fov | focal_length, fov_axis), directional
               (direction | to_world, irradiance), constant (radiance),
               envmap (filename: lat-long OpenEXR, scale, to_world)
   sensor      perspective (fov + fov_axis x|y|diagonal|smaller|larger, or focal_length such as
               "50mm" on 35 mm film (Mitsuba's default when neither is given), focus_distance
-              (read, no effect on a pinhole), to_world, near_clip, far_clip) with hdrfilm (width,
+              (read, no effect on a pinhole), to_world, near_clip, far_clip), orthographic (to_world
+              scales the window x in [-1, 1], y in [-1/aspect, 1/aspect]; near_clip, far_clip);
+              with hdrfilm (width,
               height, rfilter gaussian (stddev; the default, 0.5) | tent (radius) | box) and
               independent sampler (sample_count, seed)
-  integrators volpath, path (max_depth, rr_depth, hide_emitters)
+  integrators volpath, path (max_depth, rr_depth, hide_emitters), direct (shading_samples,
+              emitter_samples, bsdf_samples: 0 or 1; hide_emitters), moment around one of them
+              (its R, G, B image; the moment AOVs are not written)
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. principled,
-mask, blendbsdf, bumpmap, normalmap, spot, projector, direct, instance/shapegroup, heterogeneous media,
-spectra from files or wavelength lists.
+blendbsdf, bumpmap, normalmap, instance/shapegroup, mesh_attribute textures, emissive media.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only
 (devices and pipes are refused); an attribute at most 1 MiB after $substitution; at most 100

@@ -34,6 +34,9 @@ struct BuildReport {
         std::string role;  // "interior" or "exterior"
     };
     std::vector<MacrofacetUse> macrofacet;
+    /// What the scene asks for that mfrender leaves out without changing the image (e.g. the
+    /// moment integrator's AOV channels), one line each with the element's file:line.
+    std::vector<std::string> warnings;
 };
 
 /// Without `errors`, throws every problem (mf::Error or mf::ErrorList); with it, adds them there

@@ -32,6 +32,13 @@ public:
         float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
         return ((u > 0.5f) == (v > 0.5f)) ? c0_->eval(uv_in) : c1_->eval(uv_in);
     }
+    // Mitsuba 3.9.1's checkerboard eval_1 picks the colours the other way round from its eval
+    // (measured with its mask plugin): reproduced, so that a mask's holes fall where Mitsuba's do
+    float eval_1(const Vec2& uv_in) const override {
+        Vec2 uv = t_.apply(uv_in);
+        float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
+        return ((u > 0.5f) != (v > 0.5f)) ? c0_->eval_1(uv_in) : c1_->eval_1(uv_in);
+    }
     // Both colours may occur in any uv rectangle that is not inside one square: their union.
     ValueRange range() const override {
         ValueRange r = c0_->range();
@@ -59,6 +66,7 @@ public:
         mean_ = texels_.values().empty() ? 0.0f : float(sum / double(texels_.values().size()));
     }
     float mean() const override { return mean_; }
+    std::pair<int, int> resolution() const override { return {w_, h_}; }
     Rgb eval(const Vec2& uv_in) const override {
         Vec2 uv = t_.apply(uv_in);
         float x = uv.x * float(w_), y = uv.y * float(h_);

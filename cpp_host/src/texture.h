@@ -8,6 +8,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "math.h"
@@ -19,6 +20,12 @@ class Texture {
 public:
     virtual ~Texture() = default;
     virtual Rgb eval(const Vec2& uv) const = 0;
+    /// Mitsuba's Texture::eval_1, the scalar that monochromatic users (mask opacity) read: the
+    /// luminance of eval(), except where Mitsuba's own eval_1 differs (checkerboard).
+    virtual float eval_1(const Vec2& uv) const { return eval(uv).luminance(); }
+    /// Mitsuba's Texture::resolution: a bitmap's width and height, 1 x 1 otherwise (a projector
+    /// takes its image's aspect from it).
+    virtual std::pair<int, int> resolution() const { return {1, 1}; }
     /// Per-channel bounds (3 channels) over all uv.
     virtual ValueRange range() const = 0;
     /// Per-channel bounds over the uv rectangle [uv_lo, uv_hi] (before to_uv); by default range().

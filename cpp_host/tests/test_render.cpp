@@ -10,17 +10,34 @@
 //  * Determinism: same seed → bit-identical EXR files, with 1 and 2 threads alike.
 //  * Light sampling: MIS, BSDF sampling alone and NEE alone render the same image (4.5 SE of the
 //    pixel-wise difference), in media and on surfaces, for area, point and environment lights.
+//  * Spot light: a diffuse plane lit and seen from the spot's position has the analytic radiance
+//    ρ I f(θ) cos³θ / (π z²) (Mitsuba's linear falloff f); exactly 0 beyond the cutoff.
+//  * Heterogeneous medium: through a grid varying along the view axis (and a chromatic constant
+//    volume) the transmittance is exp(-scale ∫ sigma_t) over the volume's box only (Mitsuba's
+//    extent), for camera paths (delta tracking) and shadow rays (ratio tracking): 4.5 SE.
+//  * Mask: seen against an environment of 1 a black masked sheet shows 1 - opacity; a diffuse
+//    plane under a directional light behind a mask gets rho E (1 - opacity) / pi in volpath
+//    (shadow rays pass with the transparency) and 0 in path (visibility blocked), exactly.
+//  * Projector: a diffuse plane at depth 1 facing it has radiance rho E inside the projected
+//    frame (Mitsuba's inverse-importance scaling), 0 outside; the frame's aspect is the
+//    bitmap's (4:2 here).
+//  * Orthographic sensor: an emitting 0.6 x 0.4 rectangle fills exactly the pixels of its
+//    footprint in the window x in [-1, 1], y in [-1/aspect, 1/aspect] (32x16: aspect 2).
+//  * direct = path with max_depth 2 (bit-identical), moment(X) = X (bit-identical); refusals.
 //  * Default BSDF: an area light without <bsdf> reflects nothing (Mitsuba: black diffuse): exactly
 //    its radiance under an environment; a plain shape without one is diffuse 0.5.
 #include <unistd.h>
 
+#include <cstdint>
 #include <vector>
 
 #include "check.h"
+#include "bsdf.h"
 #include "integrator.h"
 #include "render.h"
 #include "scene_builder.h"
 #include "scene_util.h"
+#include "texture.h"
 
 using namespace mf;
 
@@ -331,6 +348,283 @@ TEST_CASE(light_sampling_estimators_agree) {
     };
     agree("bsdf-only - mis", bsdf, mis);
     agree("nee-only - mis", nee, mis);
+}
+
+TEST_CASE(spot_light_analytic) {
+    // Spot at height z = 2 over a diffuse plane (ρ = 0.5), pointing straight down, seen by a
+    // 64x64 camera at the same point (fov 90°: θ up to 54.7° at the corners). A delta light seen
+    // with a box filter: each pixel averages ρ I f(θ) cos³θ / (π z²) over its footprint (256
+    // uniform positions). Pixels whose four corners lie inside beam_width (20°): within 0.2 % of
+    // the value at the centre (measured worst 0.13 %: the positions' noise); inside the linear
+    // ramp (20°-30°, where f drops by ~0.17 across a pixel): 2 % of the beam-edge value (measured
+    // worst ~1 %; a ramp linear in cos θ instead of θ is off by up to 4 %); beyond
+    // cutoff_angle (30°): exactly 0.
+    const float z = 2, rho = 0.5f, I = 4;
+    const std::string path = work("spot_analytic.xml"), out = work("spot_analytic.exr");
+    write_file(path, "<scene version=\"3.0.0\"><integrator type=\"path\"><integer name=\"max_depth\" value=\"2\"/></integrator>" +
+                         camera(z, 90.0f, 64, 64, 256) +
+                         R"(<shape type="rectangle"><transform name="to_world"><scale value="100"/></transform>
+                            <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+                            <emitter type="spot"><rgb name="intensity" value="4"/><float name="cutoff_angle" value="30"/>
+                            <float name="beam_width" value="20"/><transform name="to_world">
+                            <lookat origin="0, 0, 2" target="0, 0, 0" up="0, 1, 0"/></transform></emitter></scene>)");
+    CHECK(run({path, "-o", out, "--quiet"}) == 0);
+    Image img = read_exr(out);
+    const double deg = M_PI / 180, cutoff = 30 * deg, beam = 20 * deg;
+    auto theta = [](double a, double b) { return std::atan(std::sqrt(a * a + b * b)); };  // tan_half = 1
+    auto radiance = [&](double th) {
+        double f = th <= beam ? 1.0 : th < cutoff ? (cutoff - th) / (cutoff - beam) : 0.0;
+        double c = std::cos(th);
+        return rho * I * f * c * c * c / (M_PI * z * z);
+    };
+    int n_beam = 0, n_ramp = 0, n_dark = 0;
+    double worst_beam = 0, worst_ramp = 0;
+    for (int j = 0; j < 64; ++j)
+        for (int i = 0; i < 64; ++i) {
+            double lo_a = 2.0 * i / 64 - 1, hi_a = 2.0 * (i + 1) / 64 - 1, lo_b = 2.0 * j / 64 - 1, hi_b = 2.0 * (j + 1) / 64 - 1;
+            double t_min = theta(std::min(std::fabs(lo_a), std::fabs(hi_a)) * (lo_a * hi_a > 0),
+                                 std::min(std::fabs(lo_b), std::fabs(hi_b)) * (lo_b * hi_b > 0));
+            double t_max = theta(std::max(std::fabs(lo_a), std::fabs(hi_a)), std::max(std::fabs(lo_b), std::fabs(hi_b)));
+            double expect = radiance(theta((lo_a + hi_a) / 2, (lo_b + hi_b) / 2));
+            float v = img.rgb[3 * (size_t(j) * 64 + i)];
+            if (t_min > cutoff) {
+                CHECK(v == 0.0f);
+                ++n_dark;
+            } else if (t_max < beam) {
+                worst_beam = std::max(worst_beam, std::fabs(v / expect - 1));
+                ++n_beam;
+            } else if (t_min > beam && t_max < cutoff) {
+                worst_ramp = std::max(worst_ramp, std::fabs(v - expect) / radiance(beam));
+                ++n_ramp;
+            }
+        }
+    std::printf("  spot: %d beam pixels (worst rel. error %.2e), %d ramp pixels (worst %.2e of the beam edge), %d dark\n",
+                n_beam, worst_beam, n_ramp, worst_ramp, n_dark);
+    CHECK(n_beam > 100 && n_ramp > 100 && n_dark > 1000);
+    CHECK_MSG(worst_beam < 2e-3, "beam: " + std::to_string(worst_beam));
+    CHECK_MSG(worst_ramp < 2e-2, "ramp: " + std::to_string(worst_ramp));
+    // Mitsuba's refusals: a varying intensity, a constant projected texture; and angles
+    auto spot = [&](const std::string& inner) {
+        build_scene(parse_scene_string("<scene version=\"3.0.0\">" + camera(z, 90.0f, 8, 8, 1) + "<emitter type=\"spot\">" + inner +
+                                           "</emitter></scene>", work("spot_bad.xml"), {}),
+                    BuildOptions(), nullptr);
+    };
+    CHECK_THROWS_WITH(spot(R"(<texture name="intensity" type="checkerboard"/>)"), "cannot be spatially varying");
+    CHECK_THROWS_WITH(spot(R"(<rgb name="texture" value="0.5"/>)"), "must be a spatially varying texture");
+    CHECK_THROWS_WITH(spot(R"(<float name="cutoff_angle" value="10"/><float name="beam_width" value="12"/>)"),
+                      "\"beam_width\" must lie in [0, cutoff_angle]");
+    CHECK_THROWS_WITH(spot(R"(<float name="cutoff_angle" value="95"/><texture name="texture" type="checkerboard"/>)"),
+                      "(0, 90) degrees with a texture");
+}
+
+TEST_CASE(direct_and_moment_integrators) {
+    // Mitsuba's direct is the path estimator stopped after one bounce: same seed, same image as
+    // path with max_depth 2, bit for bit; moment renders its nested integrator's image.
+    const std::string body = camera(4.0f, 40.0f, 24, 24, 8) + R"(
+        <shape type="sphere"><float name="radius" value="0.7"/><bsdf type="roughplastic"><float name="alpha" value="0.2"/></bsdf></shape>
+        <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><lookat origin="1, 2, 2" target="0, 0, 0" up="0, 1, 0"/></transform>
+          <emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>
+        <emitter type="spot"><rgb name="intensity" value="3"/><transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0"/></transform></emitter>
+        <emitter type="constant"><rgb name="radiance" value="0.1"/></emitter></scene>)";
+    auto render_xml = [&](const std::string& name, const std::string& integrator) {
+        const std::string path = work(name + ".xml"), out = work(name + ".exr");
+        write_file(path, "<scene version=\"3.0.0\">" + integrator + body);
+        CHECK(run({path, "-o", out, "--quiet", "--seed", "7"}) == 0);
+        return read_file(out);
+    };
+    const std::string path2 = render_xml("int_path2", R"(<integrator type="path"><integer name="max_depth" value="2"/></integrator>)");
+    CHECK(render_xml("int_direct", R"(<integrator type="direct"/>)") == path2);
+    CHECK(render_xml("int_moment", R"(<integrator type="moment"><integrator type="direct"/></integrator>)") == path2);
+    auto built = [&](const std::string& integrator) {
+        return build_scene(parse_scene_string("<scene version=\"3.0.0\">" + integrator + body, work("int.xml"), {}), BuildOptions(),
+                           nullptr)->integrator;
+    };
+    IntegratorSettings s = built(R"(<integrator type="direct"><integer name="emitter_samples" value="0"/></integrator>)");
+    CHECK(s.light_sampling == LightSampling::BsdfOnly && s.max_depth == 2 && !s.volumetric);
+    s = built(R"(<integrator type="direct"><integer name="bsdf_samples" value="0"/></integrator>)");
+    CHECK(s.light_sampling == LightSampling::EmitterOnly);
+    CHECK_THROWS_WITH(built(R"(<integrator type="direct"><integer name="bsdf_samples" value="4"/></integrator>)"),
+                      "\"bsdf_samples\" must be 0 or 1");
+    CHECK_THROWS_WITH(built(R"(<integrator type="direct"><integer name="shading_samples" value="0"/></integrator>)"),
+                      "both 0");
+    CHECK_THROWS_WITH(built(R"(<integrator type="moment"/>)"), "exactly one nested <integrator>");
+    CHECK_THROWS_WITH(built(R"(<integrator type="moment"><integrator type="ptracer"/></integrator>)"),
+                      "unsupported integrator plugin \"ptracer\"");
+}
+
+TEST_CASE(heterogeneous_transmittance) {
+    // A 1x1x4 grid (cell centres at z = 1/8, 3/8, 5/8, 7/8 of its box: 0.2, 1.0, 0.4, 0.8; clamped
+    // beyond the end centres) placed on [-0.5, 0.5]^3 inside a null cube [-1, 1]^3: along z the
+    // trilinear density integrates to 0.6, so with scale 2 the optical depth is 1.2 / cos θ --
+    // beyond the box there is no medium (Mitsuba's intersect_aabb; a clamped grid evaluated there
+    // would add 1.0). Albedo 0, constant environment 1: each pixel is the transmittance.
+    const std::string vol = work("hetero_ramp.vol");
+    {
+        std::string b = "VOL";
+        b.push_back(char(3));
+        auto put_i = [&](int32_t v) { b.append(reinterpret_cast<const char*>(&v), 4); };
+        auto put_f = [&](float v) { b.append(reinterpret_cast<const char*>(&v), 4); };
+        for (int32_t v : {1, 1, 1, 4, 1}) put_i(v);  // float32, 1x1x4, 1 channel
+        for (float v : {0.f, 0.f, 0.f, 1.f, 1.f, 1.f}) put_f(v);
+        for (float v : {0.2f, 1.0f, 0.4f, 0.8f}) put_f(v);
+        write_file(vol, b);
+    }
+    struct Case { std::string sigma_t; double tau[3]; };
+    const std::string box = R"(<transform name="to_world"><translate value="-0.5, -0.5, -0.5"/></transform>)";
+    const Case cases[] = {
+        {R"(<volume name="sigma_t" type="gridvolume"><string name="filename" value="hetero_ramp.vol"/>)" + box + "</volume>", {1.2, 1.2, 1.2}},
+        {R"(<volume name="sigma_t" type="constvolume"><rgb name="value" value="0.5, 0.25, 1"/>)" + box + "</volume>", {1.0, 0.5, 2.0}}};
+    int k = 0;
+    for (const Case& c : cases) {
+        const std::string medium = R"(<shape type="cube"><bsdf type="null"/><medium type="heterogeneous" name="interior">)" + c.sigma_t +
+                                   R"(<float name="scale" value="2"/><rgb name="albedo" value="0"/></medium></shape>)";
+        const std::string scene = work("hetero" + std::to_string(k) + ".xml"), out = work("hetero" + std::to_string(k) + ".exr");
+        ++k;
+        write_file(scene, "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(5.0f, 2.0f, 16, 16, 256) + medium +
+                              "<emitter type=\"constant\"/></scene>");
+        CHECK(run({scene, "-o", out, "--quiet"}) == 0);
+        Stats st = stats(read_exr(out), 0.0);
+        for (int ch = 0; ch < 3; ++ch) {
+            double expect = 0;  // mean over pixel centres of exp(-tau / cos θ), cos θ >= 0.9998
+            float th = std::tan(1.0f * kPi / 180.0f);
+            for (int y = 0; y < 16; ++y)
+                for (int x = 0; x < 16; ++x) {
+                    double lx = (1 - 2 * (x + 0.5) / 16) * th, ly = (1 - 2 * (y + 0.5) / 16) * th;
+                    expect += std::exp(-c.tau[ch] * std::sqrt(1 + lx * lx + ly * ly)) / 256.0;
+                }
+            double tol = 4.5 * st.se[ch] + 1e-4;
+            CHECK_MSG(std::fabs(st.mean[ch] - expect) < tol, "camera paths, case " + std::to_string(k) + " ch " + std::to_string(ch) +
+                                                                 ": " + std::to_string(st.mean[ch]) + " vs " + std::to_string(expect));
+            std::printf("  heterogeneous case %d ch%d (camera paths): %.5f expected %.5f (se %.5f)\n", k, ch, st.mean[ch], expect,
+                        st.se[ch]);
+        }
+        // shadow rays straight down the axis: ratio tracking, averaged over 20000 estimates
+        auto sc = build_scene(parse_scene_string("<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(5.0f, 2.0f, 4, 4, 1) +
+                                                     medium + "</scene>", scene, {}),
+                              BuildOptions(), nullptr);
+        PathIntegrator integ(*sc);
+        double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+        const int n = 20000;
+        for (int i = 0; i < n; ++i) {
+            Sampler smp(7, uint32_t(i), 0);
+            Rgb T = integ.shadow_transmittance(Vec3(0, 0, 2), Vec3(0, 0, -1), kInf, nullptr, smp);
+            for (int ch = 0; ch < 3; ++ch) sum[ch] += T[ch], sum2[ch] += double(T[ch]) * T[ch];
+        }
+        for (int ch = 0; ch < 3; ++ch) {
+            double m = sum[ch] / n, se = std::sqrt(std::max(0.0, sum2[ch] / n - m * m) / n), expect = std::exp(-c.tau[ch]);
+            CHECK_MSG(std::fabs(m - expect) < 4.5 * se + 2e-4 * expect,
+                      "shadow rays, case " + std::to_string(k) + " ch " + std::to_string(ch) + ": " + std::to_string(m) + " vs " +
+                          std::to_string(expect) + " (se " + std::to_string(se) + ")");
+            std::printf("  heterogeneous case %d ch%d (shadow rays): %.5f expected %.5f (se %.5f)\n", k, ch, m, expect, se);
+        }
+    }
+    // refusals: albedo above 1 in a grid, has_spectral_extinction false, a 6-channel volume
+    auto build = [&](const std::string& inner) {
+        build_scene(parse_scene_string("<scene version=\"3.0.0\">" + camera(5.0f, 2.0f, 4, 4, 1) +
+                                           R"(<shape type="cube"><bsdf type="null"/><medium type="heterogeneous" name="interior">)" + inner +
+                                           "</medium></shape></scene>", work("hetero_bad.xml"), {}),
+                    BuildOptions(), nullptr);
+    };
+    CHECK_THROWS_WITH(build(R"(<boolean name="has_spectral_extinction" value="false"/>)"), "has_spectral_extinction");
+    CHECK_THROWS_WITH(build(R"(<volume name="albedo" type="constvolume"><float name="value" value="1.5"/></volume>)"), "outside [0, 1]");
+    CHECK_THROWS_WITH(build(R"(<float name="albedo" value="2"/>)"), "must lie in [0, 1]");
+}
+
+TEST_CASE(mask_bsdf) {
+    const std::string sheet = R"(<shape type="rectangle"><transform name="to_world"><translate z="1"/></transform>
+        <bsdf type="mask"><float name="opacity" value="0.3"/><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf></bsdf></shape>)";
+    for (const char* integrator : {"path", "volpath"}) {
+        const std::string name = std::string("mask_env_") + integrator;
+        write_file(work(name + ".xml"), std::string("<scene version=\"3.0.0\"><integrator type=\"") + integrator + "\"/>" +
+                                            camera(3.0f, 10.0f, 16, 16, 256) + sheet + "<emitter type=\"constant\"/></scene>");
+        CHECK(run({work(name + ".xml"), "-o", work(name + ".exr"), "--quiet"}) == 0);
+        Stats st = stats(read_exr(work(name + ".exr")), 0.7);
+        CHECK_MSG(std::fabs(st.mean[0] - 0.7) < 4.5 * st.se[0], std::string(integrator) + ": " + std::to_string(st.mean[0]) + " vs 0.7");
+        std::printf("  mask (%s) against the environment: %.5f (expected 0.7, se %.5f)\n", integrator, st.mean[0], st.se[0]);
+        // a lit plane behind the sheet (seen from below through nothing): direct light through the mask
+        const std::string lit = work(name + "_lit.xml");
+        write_file(lit, std::string("<scene version=\"3.0.0\"><integrator type=\"") + integrator +
+                            "\"><integer name=\"max_depth\" value=\"2\"/></integrator>" + camera(0.5f, 10.0f, 8, 8, 4) + sheet +
+                            R"(<shape type="rectangle"><transform name="to_world"><scale value="100"/></transform>
+                               <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+                               <emitter type="directional"><vector name="direction" x="0" y="0" z="-1"/><rgb name="irradiance" value="2"/></emitter></scene>)");
+        CHECK(run({lit, "-o", work(name + "_lit.exr"), "--quiet"}) == 0);
+        const double expect = std::string(integrator) == "volpath" ? 0.5 * 2 * 0.7 / M_PI : 0.0;
+        for (float v : read_exr(work(name + "_lit.exr")).rgb) CHECK_NEAR(v, expect, 1e-5);
+    }
+    // Mitsuba's checkerboard eval_1 (the mask's opacity) swaps the colours of its eval
+    auto checker = make_checkerboard_texture(make_constant_texture(Rgb(1.0f)), make_constant_texture(Rgb(0.0f)), UvTransform());
+    CHECK(checker->eval(Vec2(0.25f, 0.25f)).r == 1.0f && checker->eval_1(Vec2(0.25f, 0.25f)) == 0.0f);
+    CHECK(make_mask(checker, make_diffuse(Rgb(0.5f)))->transparency(Vec2(0.25f, 0.25f)) == 1.0f);
+    CHECK(make_mask(checker, make_diffuse(Rgb(0.5f)))->transparency(Vec2(0.75f, 0.25f)) == 0.0f);
+}
+
+TEST_CASE(projector_analytic) {
+    // Projector at the camera position (0, 0, 2) looking down at a diffuse plane (rho = 0.5) at
+    // depth 2, fov 40° along x, a 4x2 constant EXR of irradiance 0.3 (aspect 2: the frame's half
+    // extent at depth 2 is 2 tan 20° = 0.728 in x, 0.364 in y) and scale 2: radiance
+    // rho E scale / z² = 0.5 * 0.3 * 2 / 4 inside, 0 outside. Camera fov 60°, 32x32, box filter.
+    Image tex;
+    tex.width = 4;
+    tex.height = 2;
+    tex.rgb.assign(4 * 2 * 3, 0.3f);
+    write_exr(work("projector_tex.exr"), tex);
+    const std::string path = work("projector.xml"), out = work("projector_out.exr");
+    write_file(path, "<scene version=\"3.0.0\"><integrator type=\"direct\"/>" + camera(2.0f, 60.0f, 32, 32, 4) +
+                         R"(<shape type="rectangle"><transform name="to_world"><scale value="100"/></transform>
+                            <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+                            <emitter type="projector"><float name="fov" value="40"/><float name="scale" value="2"/>
+                            <texture name="irradiance" type="bitmap"><string name="filename" value="projector_tex.exr"/></texture>
+                            <transform name="to_world"><lookat origin="0, 0, 2" target="0, 0, 0" up="0, 1, 0"/></transform></emitter></scene>)");
+    CHECK(run({path, "-o", out, "--quiet"}) == 0);
+    Image img = read_exr(out);
+    const double inside = 0.5 * 0.3 * 2 / 4, tx = std::tan(30 * M_PI / 180) * 2, hx = 2 * std::tan(20 * M_PI / 180), hy = hx / 2;
+    int n_in = 0, n_out = 0;
+    for (int j = 0; j < 32; ++j)
+        for (int i = 0; i < 32; ++i) {
+            // the pixel's footprint on the plane (|x| and |y| ranges; the image is symmetric)
+            double x0 = std::fabs(tx * (2.0 * i / 32 - 1)), x1 = std::fabs(tx * (2.0 * (i + 1) / 32 - 1));
+            double y0 = std::fabs(tx * (2.0 * j / 32 - 1)), y1 = std::fabs(tx * (2.0 * (j + 1) / 32 - 1));
+            float v = img.rgb[3 * (size_t(j) * 32 + i)];
+            if (std::max(x0, x1) < hx && std::max(y0, y1) < hy) {
+                CHECK_NEAR(v, inside, 1e-5);
+                ++n_in;
+            } else if (std::min(x0, x1) > hx || std::min(y0, y1) > hy) {
+                CHECK(v == 0.0f);
+                ++n_out;
+            }
+        }
+    std::printf("  projector: %d pixels inside the frame (%.5f each), %d outside (0)\n", n_in, inside, n_out);
+    CHECK(n_in > 50 && n_out > 300);
+}
+
+TEST_CASE(orthographic_sensor) {
+    const std::string path = work("ortho.xml"), out = work("ortho.exr");
+    write_file(path, R"(<scene version="3.0.0"><integrator type="path"/>
+        <sensor type="orthographic"><transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+          <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="16"/><rfilter type="box"/></film>
+          <sampler type="independent"><integer name="sample_count" value="4"/></sampler></sensor>
+        <shape type="rectangle"><transform name="to_world"><scale x="0.3" y="0.2"/></transform>
+          <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape></scene>)");
+    CHECK(run({path, "-o", out, "--quiet"}) == 0);
+    Image img = read_exr(out);
+    int lit = 0, dark = 0;
+    for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 32; ++i) {
+            // the pixel's window: x in [-1, 1] over 32 columns, y in [-0.5, 0.5] over 16 rows
+            double x0 = std::fabs(-1 + 2.0 * i / 32), x1 = std::fabs(-1 + 2.0 * (i + 1) / 32);
+            double y0 = std::fabs(-0.5 + 1.0 * j / 16), y1 = std::fabs(-0.5 + 1.0 * (j + 1) / 16);
+            float v = img.rgb[3 * (size_t(j) * 32 + i)];
+            if (std::max(x0, x1) < 0.3 && std::max(y0, y1) < 0.2) {
+                CHECK(v == 2.0f);
+                ++lit;
+            } else if (std::min(x0, x1) > 0.3 || std::min(y0, y1) > 0.2) {
+                CHECK(v == 0.0f);
+                ++dark;
+            }
+        }
+    std::printf("  orthographic: %d pixels inside the rectangle, %d outside\n", lit, dark);
+    CHECK(lit == 8 * 6 && dark > 400);  // 8 columns of 1/16 within |x| < 0.3, 6 rows of 1/16 within |y| < 0.2
 }
 
 TEST_MAIN()

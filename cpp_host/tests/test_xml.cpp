@@ -151,7 +151,9 @@ TEST_CASE(builder_errors) {
     CHECK_THROWS_WITH(build("<shape type=\"sphere\">\n<bsdf type=\"diffuse\">\n<string name=\"reflectance\" value=\"red\"/></bsdf></shape>"),
                       "parameter \"reflectance\" has type string, expected rgb");
     CHECK_THROWS_WITH(build("\n<shape type=\"torus\"/>"), "mem.xml:6: <shape type=\"torus\">: unsupported shape plugin");
-    CHECK_THROWS_WITH(build("\n<emitter type=\"spot\"/>"), "mem.xml:6: <emitter type=\"spot\">: unsupported emitter plugin");
+    CHECK_THROWS_WITH(build("\n<emitter type=\"sunsky\"/>"), "mem.xml:6: <emitter type=\"sunsky\">: unsupported emitter plugin");
+    CHECK_THROWS_WITH(build("\n<shape type=\"rectangle\"><emitter type=\"area\"><texture name=\"radiance\" type=\"checkerboard\"/></emitter></shape>"),
+                      "parameter \"radiance\" as a texture is not supported");
     CHECK_THROWS_WITH(build("\n<shape type=\"obj\"><string name=\"filename\" value=\"nope.obj\"/></shape>"),
                       "parameter \"filename\" refers to a missing file");
     CHECK_THROWS_WITH(build("\n<shape type=\"sphere\"><medium type=\"homogeneous\"/></shape>"),

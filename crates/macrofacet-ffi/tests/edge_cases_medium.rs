@@ -153,3 +153,18 @@ fn fuzz_longer_segment_from_below_the_top_face_transmits_no_more() {
     let (short, long) = (2.7855618193418084e-66, 1.535836554474395e-64);
     assert!(medium.transmittance(f, d, short) >= medium.transmittance(f, d, long));
 }
+
+/// Found by fuzzing (`fuzz/`, target `medium_queries`): above the shell, descending at
+/// `d_z = −2.8e-309` (a frame normal of length 1.8e308), the shell is entered at t = 1.7e308 and
+/// the polishing bracket overflowed: the flight "scattered" at `t = +inf`.
+#[test]
+fn fuzz_shell_entered_near_f64_max_never_scatters_at_infinity() {
+    let medium = medium(&[("variance", 4.855953393399506e-5), ("alpha", 0.5)], "gpss");
+    let d = DVec3::new(-0.7071067811865475, 0.7071067811865475, -2.781342323134e-309);
+    for u in [2.2250738585072014e-308, 0.5] {
+        match medium.sample_free_flight(0.5, d, f64::INFINITY, u) {
+            FreeFlight::Pass => {}
+            FreeFlight::Scatter { t } => assert!(t.is_finite(), "u {u}: scattered at t = {t}"),
+        }
+    }
+}

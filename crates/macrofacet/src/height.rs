@@ -211,6 +211,9 @@ impl HeightProfile {
                 break;
             }
         }
-        Some(t)
+        // Entering the shell near f64::MAX (a direction 1e-309 off the surface), the bracket's
+        // expansion overflows: no representable distance reaches the collision (found by
+        // fuzzing: "scattered at t = inf").
+        t.is_finite().then_some(t)
     }
 }

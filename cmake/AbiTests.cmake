@@ -11,7 +11,7 @@
 #                         cbindgen of another version
 #   native_static_libs    the libs rustc printed for the crate equal the configured ones
 #   install_consumer      cmake --install into a temp prefix; find_package + pkg-config consumers
-#   rust_ffi_abi          (MF_TEST_CARGO=ON) cargo test --test ffi_abi: FFI == core, bit for bit
+#   rust_ffi_abi          (MF_TEST_CARGO=ON) cargo test -p macrofacet-ffi --test ffi_abi: FFI == core, bit for bit
 
 set(MF_C_WARNINGS -Wall -Wextra -Werror -pedantic)
 set(MF_TESTS_DIR "${CMAKE_CURRENT_SOURCE_DIR}/tests")
@@ -99,7 +99,7 @@ set_tests_properties(install_consumer PROPERTIES TIMEOUT 300)
 # overwrite each other's artifacts and rebuild the crate every time.
 if(MF_TEST_CARGO)
   add_test(NAME rust_ffi_abi
-    COMMAND "${MF_CARGO}" test --profile "${MF_CARGO_PROFILE}" --test ffi_abi
+    COMMAND "${MF_CARGO}" test --profile "${MF_CARGO_PROFILE}" -p macrofacet-ffi --test ffi_abi
       --manifest-path "${CMAKE_CURRENT_SOURCE_DIR}/Cargo.toml" --target-dir "${CMAKE_BINARY_DIR}/cargo-test" ${MF_CARGO_FLAGS})
   set_tests_properties(rust_ffi_abi PROPERTIES TIMEOUT 600)
 endif()

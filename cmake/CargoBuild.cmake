@@ -2,9 +2,10 @@
 # targets with cargo, shows cargo's output live, and records what rustc reports as the native libs
 # of the staticlib.
 #
-# Inputs (-D): CARGO, MANIFEST, TARGET_DIR, PROFILE, SONAME, EXTRA_FLAGS (;-list), NATIVE_LIBS_FILE,
-# OUTPUTS (|-separated files cargo must have produced).
-foreach(var CARGO MANIFEST TARGET_DIR PROFILE SONAME NATIVE_LIBS_FILE OUTPUTS)
+# Inputs (-D): CARGO, MANIFEST, PACKAGE (the workspace member), TARGET_DIR, PROFILE, SONAME,
+# EXTRA_FLAGS (;-list), NATIVE_LIBS_FILE, ARTIFACTS (|-separated files cargo must have produced)
+# and OUTPUTS (where each artifact is published, under the library's public name).
+foreach(var CARGO MANIFEST PACKAGE TARGET_DIR PROFILE SONAME NATIVE_LIBS_FILE ARTIFACTS OUTPUTS)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "CargoBuild.cmake: ${var} is not set")
   endif()
@@ -13,7 +14,7 @@ endforeach()
 # `cargo rustc --lib`: one rustc run makes the rlib, the staticlib and the cdylib. The extra rustc
 # arguments reach only that final run: a SONAME for the .so and the native-libs report.
 execute_process(
-  COMMAND "${CARGO}" rustc --lib --profile "${PROFILE}" --manifest-path "${MANIFEST}"
+  COMMAND "${CARGO}" rustc -p "${PACKAGE}" --lib --profile "${PROFILE}" --manifest-path "${MANIFEST}"
           --target-dir "${TARGET_DIR}" ${EXTRA_FLAGS}
           -- "-Clink-arg=-Wl,-soname,${SONAME}" --print native-static-libs
   RESULT_VARIABLE result
@@ -32,11 +33,15 @@ if(match)
   file(WRITE "${NATIVE_LIBS_FILE}" "${libs}\n")
 endif()
 
+string(REPLACE "|" ";" artifacts "${ARTIFACTS}")
 string(REPLACE "|" ";" outputs "${OUTPUTS}")
-foreach(f IN LISTS outputs)
-  if(NOT EXISTS "${f}")
-    message(FATAL_ERROR "cargo succeeded but did not produce ${f}")
+foreach(artifact f IN ZIP_LISTS artifacts outputs)
+  if(NOT EXISTS "${artifact}")
+    message(FATAL_ERROR "cargo succeeded but did not produce ${artifact}")
   endif()
+  get_filename_component(dir "${f}" DIRECTORY)
+  file(MAKE_DIRECTORY "${dir}")
+  file(COPY_FILE "${artifact}" "${f}" ONLY_IF_DIFFERENT)
   # cargo leaves an up-to-date library untouched; mark it current so that the build does not
   # re-run this step every time (the inputs may be newer after a no-op edit).
   file(TOUCH_NOCREATE "${f}")

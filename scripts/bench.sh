@@ -7,10 +7,10 @@ cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 scripts/setup.sh
 
-echo "== core queries (cargo run --release --example bench_core)"
-cargo run --release --quiet --example bench_core
-echo "== varying parameters: gpis vs macrofacet (cargo run --release --example bench_core fields)"
-cargo run --release --quiet --example bench_core fields
+echo "== core queries (cargo run --release -p macrofacet --example bench_core)"
+cargo run --release --quiet -p macrofacet --example bench_core
+echo "== varying parameters: gpis vs macrofacet (cargo run --release -p macrofacet --example bench_core fields)"
+cargo run --release --quiet -p macrofacet --example bench_core fields
 
 build_dir=build/bench
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMF_BUILD_TESTS=OFF >/dev/null

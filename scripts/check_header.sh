@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fails (exit 1, printing the diff) when include/macrofacet.h differs from what the pinned cbindgen
-# generates from the current src/ffi/. Fix: scripts/generate_header.sh, then commit the header.
+# generates from the current crates/macrofacet-ffi/. Fix: scripts/generate_header.sh, then commit the header.
 set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"

@@ -10,27 +10,35 @@
 # the name arrays those calls index (`const NAMES` / `let *_names = [...]`). A reader call with any
 # other argument fails the check, so a refactor cannot hide names from it.
 #
-# Usage: scripts/check_params_doc.sh [README [PARAMS_RS]]   (defaults: README.md, the params.rs
-# of the tree that defines `struct Reader`). Exit 0: the table and the library agree.
+# Usage: scripts/check_params_doc.sh [README [PARAMS_RS...]]   (defaults: README.md, the params.rs
+# of the tree that defines `struct Reader` and every params.rs that builds one with `Reader::new`,
+# e.g. the gpis crate's). Exit 0: the table and the library agree.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 readme=${1:-README.md}
-params=${2:-}
-if [[ -z "$params" ]]; then
+params_files=("${@:2}")
+if ((${#params_files[@]} == 0)); then
     # Found by content, not by path, so the check survives moving the crate (src/ -> crates/*/src/).
-    params=$(grep -rlE --include=params.rs '^(pub(\([a-z]+\))? )?struct Reader\b' src crates 2>/dev/null | head -n 1 || true)
+    definition=$(grep -rlE --include=params.rs '^(pub(\([a-z]+\))? )?struct Reader\b' src crates 2>/dev/null | head -n 1 || true)
+    if [[ -n "$definition" ]]; then
+        mapfile -t params_files < <({ echo "$definition"; grep -rlE --include=params.rs 'Reader::new\(' src crates 2>/dev/null; } | sort -u)
+    fi
 fi
-if [[ -z "$params" || ! -f "$params" ]]; then
+if ((${#params_files[@]} == 0)); then
     echo "check_params_doc: no params.rs defining 'struct Reader' found (give its path as the second argument)" >&2
     exit 1
 fi
+for f in "${params_files[@]}"; do
+    [[ -f "$f" ]] || { echo "check_params_doc: $f not found" >&2; exit 1; }
+done
+params="${params_files[*]}"
 [[ -f "$readme" ]] || { echo "check_params_doc: $readme not found" >&2; exit 1; }
 
 fail=0
 
 # ---- names the library reads
-reader_calls=$(grep -oE '\br\.(float|rgb|unit_rgb|string|has)\([^)]*\)' "$params" || true)
+reader_calls=$(grep -ohE '\br\.(float|rgb|unit_rgb|string|has)\([^)]*\)' "${params_files[@]}" || true)
 literal_names=$(grep -oE '\(\"[A-Za-z0-9_]+\"' <<<"$reader_calls" | tr -d '("' || true)
 # Calls whose argument is not a literal must index one of the name arrays (or be the closure
 # variable iterating one of them); anything else is an unknown source of names.
@@ -47,7 +55,7 @@ while IFS= read -r call; do
             ;;
     esac
 done <<<"$reader_calls"
-array_names=$(grep -E '(const[[:space:]]+NAMES|let[[:space:]]+[a-z_]*names)\b[^=]*=[[:space:]]*\[' "$params" |
+array_names=$(grep -hE '(const[[:space:]]+NAMES|let[[:space:]]+[a-z_]*names)\b[^=]*=[[:space:]]*\[' "${params_files[@]}" |
     grep -oE '"[A-Za-z0-9_]+"' | tr -d '"' || true)
 library=$(printf '%s\n%s\n' "$literal_names" "$array_names" | sed '/^$/d' | sort -u)
 if [[ $(wc -l <<<"$library") -lt 10 ]]; then

@@ -29,7 +29,7 @@
 #   validation/renders.json       {"scenes": [per-scene objects]}
 #   validation/renders.tsv        scene medium spp time_s mse image notes gpis_ref_noise
 #   validation/render_patches.tsv one row per patch (header in the file)
-# which examples/validate (section 5, renders.rs) reads.
+# which crates/macrofacet-validation/examples/validate (section 5, renders.rs) reads.
 #
 # Usage: scripts/compare_gpis.sh [SCENE] [REF_SPP [SPP]]
 #   defaults bench/gpis_compare.xml, 512, 64 (an old-style first argument that is a number is

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates include/macrofacet.h from src/ffi/ with the pinned cbindgen (see cbindgen.toml).
+# Regenerates include/macrofacet.h from crates/macrofacet-ffi/ with the pinned cbindgen (see cbindgen.toml).
 # Never edit the header by hand. Usage: scripts/generate_header.sh [output-file]
 # (the default output is include/macrofacet.h; scripts/check_header.sh passes a temp file).
 set -euo pipefail
@@ -22,11 +22,11 @@ if [ "$found" != "cbindgen $CBINDGEN_VERSION" ]; then
     exit 1
 fi
 
-# cbindgen parses the crate's sources (cargo metadata for the layout); it builds nothing.
+# cbindgen parses the ffi crate's sources (cargo metadata for the layout); it builds nothing.
 # Its warnings about private constants are expected and hidden unless it fails.
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
-if ! (cd "$root" && cbindgen --quiet --config cbindgen.toml --crate macrofacet --output "$out" .) >"$log" 2>&1; then
+if ! (cd "$root" && cbindgen --quiet --config cbindgen.toml --crate macrofacet-ffi --output "$out" crates/macrofacet-ffi) >"$log" 2>&1; then
     cat "$log" >&2
     echo "generate_header: cbindgen failed" >&2
     exit 1

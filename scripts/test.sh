@@ -9,7 +9,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 
 scripts/setup.sh
 
-echo "== cargo test (release; statistical tests are seeded and bounded)" >&2
+echo "== cargo test (release; every workspace crate; statistical tests are seeded and bounded)" >&2
 cargo test --release --locked
 
 echo "== header freshness" >&2

@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use macrofacet::ffi::*;
+use macrofacet_ffi::*;
 use macrofacet_fuzz::build;
 use macrofacet_fuzz::check;
 use macrofacet_fuzz::input::Bytes;

@@ -4,7 +4,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use macrofacet::ffi::*;
+use macrofacet_ffi::*;
 use macrofacet_fuzz::build;
 use macrofacet_fuzz::check;
 use macrofacet_fuzz::input::{dvec3, vec3, Bytes};

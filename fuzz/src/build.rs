@@ -3,7 +3,7 @@
 
 use crate::check;
 use crate::input::Bytes;
-use macrofacet::ffi::*;
+use macrofacet_ffi::*;
 use std::ffi::CString;
 
 /// A parameter value as `mf_params_set_*` takes it.

@@ -2,7 +2,7 @@
 //! involved, which libFuzzer reports as a crash and saves as an artifact.
 
 use crate::input::dvec3;
-use macrofacet::ffi::{mf_free_flight, mf_gpis_hit, mf_last_error_message, mf_phase_sample_result, mf_rgb, mf_status, mf_status_str, mf_vec3};
+use macrofacet_ffi::{mf_free_flight, mf_gpis_hit, mf_last_error_message, mf_phase_sample_result, mf_rgb, mf_status, mf_status_str, mf_vec3};
 use std::ffi::CStr;
 use std::mem::{size_of, MaybeUninit};
 

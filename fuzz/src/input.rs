@@ -5,7 +5,7 @@
 //! directions.
 
 use glam::DVec3;
-use macrofacet::ffi::{mf_frame, mf_vec3};
+use macrofacet_ffi::{mf_frame, mf_vec3};
 
 /// The fuzz input, read front to back.
 pub struct Bytes<'a> {

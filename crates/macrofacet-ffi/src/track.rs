@@ -1,0 +1,306 @@
+//! `mf_track_*`: the library owns the volume event. A renderer hands it a ray segment inside a
+//! macrofacet medium and the mean surface ([`mf_surface`]); it gets back a real collision with its
+//! local frame, or a transmittance estimate for a shadow ray. Segments, majorants, frames and
+//! the planar closed forms stay inside the library (see `src/tracking.rs`).
+//!
+//! Random numbers: each call takes a 64-bit `seed` and runs its own PCG32 from it on the stream
+//! [`TRACK_STREAM`] (tracking needs an unbounded count of random numbers); the same seed gives
+//! the same result. Hosts derive the
+//! seed from their sampler (e.g. a hash of pixel, sample index and bounce).
+
+use super::field::{mf_field, mf_local_params, CallbackField};
+use super::medium::{mf_frame, mf_medium, mf_vec3};
+use super::surface::{with_surface, mf_surface, SurfaceVisitor};
+use super::{arg, boundary, mf_status, out, FfiError, FfiResult};
+use macrofacet::error::{Error, ErrorKind};
+use macrofacet::frame::check_direction;
+use macrofacet::medium::MacrofacetMedium;
+use macrofacet::rng::Pcg32;
+use macrofacet::field::MediumField;
+use macrofacet::surface::MeanSurface;
+use macrofacet::tracking::{TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
+use glam::DVec3;
+use std::ffi::c_void;
+
+/// One tracking query: the ray `origin + t d` (`d` unit, world space), `t ∈ [0, t_max]`
+/// (`t_max` may be `+inf`), inside the medium's region; `seed` drives the call's random numbers.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct mf_track_query {
+    pub origin: mf_vec3,
+    pub d: mf_vec3,
+    pub t_max: f64,
+    pub seed: u64,
+}
+
+/// What one tracking call cost: surface queries (callbacks), tracked segments (bound queries),
+/// tentative collisions, and majorant violations — tentative collisions where the true
+/// extinction exceeded the majorant because the surface's bounds were wrong (0 for a correct
+/// surface; a non-zero count means a biased result).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct mf_track_stats {
+    pub surface_queries: u32,
+    pub segments: u32,
+    pub tentative_collisions: u32,
+    pub majorant_violations: u32,
+}
+
+/// The outcome of [`mf_track_free_flight`]. When `scattered`, a real collision happened at
+/// `t` (`0 <= t <= t_max`), at `p` where the signed distance is `f` and the local frame of the
+/// phase function is `frame`; otherwise the ray passed the segment (the other fields are zero and
+/// `t = t_max`). The weight of either outcome is 1: the flakes' albedo is in the phase function.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct mf_collision {
+    pub scattered: bool,
+    pub t: f64,
+    pub p: mf_vec3,
+    pub f: f64,
+    pub frame: mf_frame,
+    /// The field's parameters at the collision (`set = 0` without a field or when passing).
+    pub local: mf_local_params,
+    pub stats: mf_track_stats,
+}
+
+/// The outcome of [`mf_track_transmittance`]: an unbiased estimate in `[0, 1]`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct mf_transmittance {
+    pub transmittance: f64,
+    pub stats: mf_track_stats,
+}
+
+impl From<TrackStats> for mf_track_stats {
+    fn from(s: TrackStats) -> Self {
+        mf_track_stats { surface_queries: s.surface_queries, segments: s.segments, tentative_collisions: s.tentative_collisions, majorant_violations: s.majorant_violations }
+    }
+}
+
+/// A validated query: origin, unit direction, length.
+fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64)> {
+    let origin = DVec3::from(q.origin);
+    if !origin.is_finite() {
+        return Err(Error::new(ErrorKind::InvalidArgument, format!("origin must be finite, got {origin}")).into());
+    }
+    let d = check_direction("d", q.d.into())?;
+    if !(q.t_max >= 0.0) {
+        return Err(Error::new(ErrorKind::InvalidArgument, format!("t_max must be >= 0 (or +inf), got {}", q.t_max)).into());
+    }
+    Ok((origin, d, q.t_max))
+}
+
+/// One call: a free flight or a transmittance, generic over the surface kind.
+/// One call: a free flight or a transmittance, with the field (if any) and the host's data.
+struct Call<'a> {
+    kind: Kind,
+    medium: &'a MacrofacetMedium,
+    field: Option<&'a mf_field>,
+    user_data: *mut c_void,
+    ray: (DVec3, DVec3, f64),
+    seed: u64,
+}
+
+#[derive(Clone, Copy)]
+enum Kind {
+    FreeFlight,
+    Transmittance,
+}
+
+enum Outcome {
+    Collision(mf_collision),
+    Transmittance(mf_transmittance),
+}
+
+impl SurfaceVisitor for Call<'_> {
+    type Output = macrofacet::error::Result<Outcome>;
+    fn visit<S: MeanSurface>(self, surface: &S) -> Self::Output {
+        match self.field {
+            None => self.run(&Tracker::new(self.medium, surface)),
+            Some(field) => {
+                let field = CallbackField::new(field, self.user_data);
+                self.run(&Tracker::with_field(self.medium, surface, &field))
+            }
+        }
+    }
+}
+
+impl Call<'_> {
+    fn run<S: MeanSurface, F: MediumField>(&self, tracker: &Tracker<S, F>) -> macrofacet::error::Result<Outcome> {
+        let mut stats = TrackStats::default();
+        let (origin, d, t_max) = self.ray;
+        let rng = &mut Pcg32::new(self.seed, TRACK_STREAM);
+        match self.kind {
+            Kind::FreeFlight => {
+                let flight = tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?;
+                let zero = DVec3::ZERO.into();
+                Ok(Outcome::Collision(match flight {
+                    TrackedFlight::Scatter { t, point, local } => mf_collision {
+                        scattered: true,
+                        t,
+                        p: (origin + t * d).into(),
+                        f: point.f,
+                        frame: mf_frame { normal: point.normal.into(), tangent: point.tangent.into() },
+                        local: (&local).into(),
+                        stats: stats.into(),
+                    },
+                    TrackedFlight::Pass => mf_collision {
+                        scattered: false,
+                        t: t_max,
+                        p: zero,
+                        f: 0.0,
+                        frame: mf_frame { normal: zero, tangent: zero },
+                        local: mf_local_params::NONE,
+                        stats: stats.into(),
+                    },
+                }))
+            }
+            Kind::Transmittance => {
+                let transmittance = tracker.transmittance(origin, d, t_max, rng, &mut stats)?;
+                Ok(Outcome::Transmittance(mf_transmittance { transmittance, stats: stats.into() }))
+            }
+        }
+    }
+}
+
+/// The optional field argument.
+pub(super) fn field_arg<'a>(field: *const mf_field) -> Option<&'a mf_field> {
+    // SAFETY: NULL or a live handle, as the caller promises.
+    unsafe { field.as_ref() }
+}
+
+fn track(kind: Kind, medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<Outcome> {
+    let call = Call { kind, medium: &medium.inner, field, user_data, ray: query(q)?, seed: q.seed };
+    Ok(with_surface(surface, user_data, call)?)
+}
+
+fn free_flight(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_collision> {
+    match track(Kind::FreeFlight, medium, surface, field, user_data, q)? {
+        Outcome::Collision(c) => Ok(c),
+        Outcome::Transmittance(_) => unreachable!("a free flight returns a collision"),
+    }
+}
+
+fn transmittance(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_transmittance> {
+    match track(Kind::Transmittance, medium, surface, field, user_data, q)? {
+        Outcome::Transmittance(t) => Ok(t),
+        Outcome::Collision(_) => unreachable!("a transmittance returns a transmittance"),
+    }
+}
+
+/// Samples a free flight along `query`'s ray through the medium around `surface`: the distance
+/// to the next real collision, with its local frame (for `mf_phase_*`). Delta tracking against
+/// majorants built from the planar closed forms and the surface's segment bounds: exact (every
+/// tentative collision real) for a planar surface, unbiased for any surface whose bounds hold.
+/// `field` (NULL for a stationary medium) gives spatially varying parameters; the collision then
+/// reports them in `local`, for `mf_phase_sample_local` / `mf_phase_eval_pdf_local`.
+/// `user_data` is passed to the surface's and the field's callbacks. Errors: invalid arguments, a
+/// callback's failure or invalid answer (NaN, non-unit normal, inconsistent bound) — reported at
+/// once.
+///
+/// # Safety
+/// Pointers must be NULL or valid; the callbacks must be safe to call with `user_data`.
+#[no_mangle]
+pub unsafe extern "C" fn mf_track_free_flight(
+    medium: *const mf_medium,
+    surface: *const mf_surface,
+    field: *const mf_field,
+    user_data: *mut c_void,
+    query: *const mf_track_query,
+    out_collision: *mut mf_collision,
+) -> mf_status {
+    boundary(|| {
+        let (m, s, q) = (arg(medium, "medium")?, arg(surface, "surface")?, arg(query, "query")?);
+        let slot = out(out_collision, "out_collision")?;
+        *slot = free_flight(m, s, field_arg(field), user_data, q)?;
+        Ok(())
+    })
+}
+
+/// An unbiased estimate of the transmittance along `query`'s ray (shadow rays): residual ratio
+/// tracking with an analytic control, so a thin shell's shadow ray rarely needs a surface query.
+///
+/// # Safety
+/// As [`mf_track_free_flight`].
+#[no_mangle]
+pub unsafe extern "C" fn mf_track_transmittance(
+    medium: *const mf_medium,
+    surface: *const mf_surface,
+    field: *const mf_field,
+    user_data: *mut c_void,
+    query: *const mf_track_query,
+    out_transmittance: *mut mf_transmittance,
+) -> mf_status {
+    boundary(|| {
+        let (m, s, q) = (arg(medium, "medium")?, arg(surface, "surface")?, arg(query, "query")?);
+        let slot = out(out_transmittance, "out_transmittance")?;
+        *slot = transmittance(m, s, field_arg(field), user_data, q)?;
+        Ok(())
+    })
+}
+
+/// Runs `one` over a batch: validates every query first, then tracks them; on any error nothing
+/// is written and the message names the failing index.
+fn track_batch<R: Copy>(
+    medium: *const mf_medium,
+    surface: *const mf_surface,
+    field: *const mf_field,
+    user_data: *mut c_void,
+    queries: *const mf_track_query,
+    count: usize,
+    output: *mut R,
+    one: impl Fn(&mf_medium, &mf_surface, Option<&mf_field>, *mut c_void, &mf_track_query) -> FfiResult<R>,
+) -> mf_status {
+    boundary(|| {
+        let (m, s) = (arg(medium, "medium")?, arg(surface, "surface")?);
+        if count == 0 {
+            return Ok(());
+        }
+        let first = arg(queries, "queries")?;
+        out(output, "out")?;
+        // SAFETY: the caller promises `count` readable queries and `count` writable outputs.
+        let queries = unsafe { std::slice::from_raw_parts(first, count) };
+        let at = |i: usize, e: FfiError| FfiError { status: e.status, message: format!("query {i}: {}", e.message) };
+        for (i, q) in queries.iter().enumerate() {
+            query(q).map_err(|e| at(i, e))?;
+        }
+        let results = queries.iter().enumerate().map(|(i, q)| one(m, s, field_arg(field), user_data, q).map_err(|e| at(i, e))).collect::<FfiResult<Vec<R>>>()?;
+        // SAFETY: see above; `output` is non-NULL.
+        unsafe { std::slice::from_raw_parts_mut(output, count) }.copy_from_slice(&results);
+        Ok(())
+    })
+}
+
+/// Batch form of [`mf_track_free_flight`] for wavefront renderers (one `user_data` for all).
+///
+/// # Safety
+/// `queries` and `out_collisions` must hold `count` elements (may be NULL when `count` is 0).
+#[no_mangle]
+pub unsafe extern "C" fn mf_track_free_flight_batch(
+    medium: *const mf_medium,
+    surface: *const mf_surface,
+    field: *const mf_field,
+    user_data: *mut c_void,
+    queries: *const mf_track_query,
+    count: usize,
+    out_collisions: *mut mf_collision,
+) -> mf_status {
+    track_batch(medium, surface, field, user_data, queries, count, out_collisions, free_flight)
+}
+
+/// Batch form of [`mf_track_transmittance`].
+///
+/// # Safety
+/// `queries` and `out_transmittances` must hold `count` elements (may be NULL when `count` is 0).
+#[no_mangle]
+pub unsafe extern "C" fn mf_track_transmittance_batch(
+    medium: *const mf_medium,
+    surface: *const mf_surface,
+    field: *const mf_field,
+    user_data: *mut c_void,
+    queries: *const mf_track_query,
+    count: usize,
+    out_transmittances: *mut mf_transmittance,
+) -> mf_status {
+    track_batch(medium, surface, field, user_data, queries, count, out_transmittances, transmittance)
+}

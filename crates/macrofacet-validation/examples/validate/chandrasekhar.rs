@@ -184,10 +184,10 @@ pub fn run(ctx: &Ctx) -> Section {
         panels_top.push(p);
         panels_bottom.push(q);
     }
-    let file = "chandrasekhar.png";
+    let file = "chandrasekhar.svg";
     let mut panels = panels_top;
     panels.extend(panels_bottom);
-    Figure { cols: 3, pw: 540, ph: 400, panels }.save(&ctx.out.join(file)).expect("write png");
+    Figure { cols: 3, pw: 540, ph: 400, panels }.save(&ctx.out.join(file)).expect("write svg");
     let csv_path = ctx.write_csv("chandrasekhar.csv", "albedo,theta_i_deg,theta_o_deg,fr_chandrasekhar,fr_macro,se,f1_eq25,f1_macro,se1", &csv);
     let _ = writeln!(
         md,

@@ -295,8 +295,8 @@ pub fn run(ctx: &Ctx) -> Section {
         panels_out.push(z_single);
         panels_out.push(z_all);
     }
-    let file = "thin_shell_albedo.png";
-    Figure { cols: 4, pw: 500, ph: 380, panels: panels_out }.save(&ctx.out.join(file)).expect("write png");
+    let file = "thin_shell_albedo.svg";
+    Figure { cols: 4, pw: 500, ph: 380, panels: panels_out }.save(&ctx.out.join(file)).expect("write svg");
     let _ = writeln!(
         md,
         "![thin-shell albedo]({file})\n\n*Figure 3a: directional albedo (channel average) vs incidence angle; top row \
@@ -447,8 +447,8 @@ fn brdf_slices(ctx: &Ctx) -> (String, (String, String, String)) {
         panels.push(p);
         rows.push(vec![dist.name().to_string(), format!("{}", dist.alpha()), format!("{mz_s:.1}"), format!("{mz_hs:.1}"), format!("{mz_a:.1}"), yes_no(mz_s <= Z_TOL && mz_a <= Z_TOL)]);
     }
-    let file = "thin_shell_brdf_slices.png";
-    Figure { cols: 4, pw: 500, ph: 380, panels }.save(&ctx.out.join(file)).expect("write png");
+    let file = "thin_shell_brdf_slices.svg";
+    Figure { cols: 4, pw: 500, ph: 380, panels }.save(&ctx.out.join(file)).expect("write svg");
     let _ = writeln!(
         md,
         "**BRDF slices.** In the incident plane at θi = 60°, `f_r cos θo` (channel average) by next-event estimation: \

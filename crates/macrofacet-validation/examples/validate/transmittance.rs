@@ -308,10 +308,10 @@ pub fn run(ctx: &Ctx) -> Section {
             q.legend = LegendPos::BottomLeft;
             panels_d.push(q);
         }
-        let file = format!("transmittance_{}.png", case.file);
+        let file = format!("transmittance_{}.svg", case.file);
         let mut panels = panels_t;
         panels.extend(panels_d);
-        Figure { cols: 3, pw: 560, ph: 400, panels }.save(&ctx.out.join(&file)).expect("write png");
+        Figure { cols: 3, pw: 560, ph: 400, panels }.save(&ctx.out.join(&file)).expect("write svg");
         let _ = writeln!(
             md,
             "![transmittance, {label}]({file})\n\n*Figure 1{sub}: {label} kernel vs {ndf}. Top: transmittance along the ray vs the \

@@ -339,10 +339,10 @@ pub fn run(ctx: &Ctx) -> Section {
             q.legend = LegendPos::TopLeft;
             panels_phi.push(q);
         }
-        let file = format!("vndf_{}.png", case.file);
+        let file = format!("vndf_{}.svg", case.file);
         let mut panels = panels_mu;
         panels.extend(panels_phi);
-        Figure { cols: angles.len(), pw: 460, ph: 360, panels }.save(&ctx.out.join(&file)).expect("write png");
+        Figure { cols: angles.len(), pw: 460, ph: 360, panels }.save(&ctx.out.join(&file)).expect("write svg");
         let _ = writeln!(
             md,
             "![vNDF, {label}]({file})\n\n*Figure 2{sub}: {label} kernel vs {ndf}, incidence 0°, 45°, 70°, 80° (columns). Top: density \

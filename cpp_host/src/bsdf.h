@@ -92,5 +92,8 @@ std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> front, std::shared_ptr
 /// Mitsuba's mask: `nested` where present, absent with probability 1 - opacity (the texture's
 /// eval_1, clamped to [0, 1]).
 std::shared_ptr<Bsdf> make_mask(std::shared_ptr<const Texture> opacity, std::shared_ptr<Bsdf> nested);
+/// Mitsuba's normalmap: `nested` in the shading frame tilted by the `normals` texture (values
+/// 2 c - 1), with Mitsuba 3.9.1's side rules and optional shadowing (bsdf_normalmap.cpp).
+std::shared_ptr<Bsdf> make_normal_map(std::shared_ptr<const Texture> normals, std::shared_ptr<Bsdf> nested, bool shadowing);
 
 }  // namespace mf

@@ -216,9 +216,16 @@ private:
             std::shared_ptr<Bsdf> nested = build_bsdf(*kids[0]->obj);
             if (nested->is_null() || nested->name() == "mask") throw err(o, "the nested BSDF of a mask cannot be null or a mask");
             b = make_mask(texture_param(o, "opacity", Rgb(0.5f)), nested);
+        } else if (t == "normalmap") {
+            auto kids = o.children_with_tag("bsdf");
+            if (kids.size() != 1) throw err(o, "expects one nested <bsdf>");
+            std::shared_ptr<Bsdf> nested = build_bsdf(*kids[0]->obj);
+            if (nested->is_null() || nested->name() == "mask") throw err(o, "the nested BSDF of a normalmap cannot be null or a mask");
+            if (!o.child_named("texture", "normalmap") && !o.has("normalmap")) throw err(o, "needs a \"normalmap\" texture");
+            b = make_normal_map(texture_param(o, "normalmap", Rgb(0.5f, 0.5f, 1.0f)), nested, o.get_bool("use_shadowing_function", true));
         } else {
             throw err(o, "unsupported BSDF plugin \"" + t +
-                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided, mask)");
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided, mask, normalmap)");
         }
         o.check_all_used();
         bsdfs_[&o] = b;
@@ -1151,7 +1158,9 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               alpha | alpha_u,alpha_v, sample_visible), plastic, roughplastic (int_ior, ext_ior,
               diffuse_reflectance (tex), specular_reflectance ((tex) when rough), nonlinear;
               rough: distribution, isotropic alpha, sample_visible), null, twosided (one or two
-              bsdfs), mask (opacity (tex), one nested bsdf: absent with probability 1 - opacity)
+              bsdfs), mask (opacity (tex), one nested bsdf: absent with probability 1 - opacity),
+              normalmap (normalmap (tex, values 2c - 1 in the shading frame), one nested bsdf,
+              use_shadowing_function; Mitsuba 3.9.1's side rules and Conty Estevez 2019 shadowing)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
               heterogeneous (sigma_t, albedo: constants or <volume> constvolume | gridvolume;
@@ -1189,7 +1198,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               (its R, G, B image; the moment AOVs are not written)
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. principled,
-blendbsdf, bumpmap, normalmap, mesh_attribute textures, emissive media.
+blendbsdf, bumpmap, mesh_attribute textures, emissive media.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only
 (devices and pipes are refused); an attribute at most 1 MiB after $substitution; at most 100

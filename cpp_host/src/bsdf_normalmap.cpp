@@ -25,19 +25,19 @@ public:
     NormalMap(std::shared_ptr<const Texture> normals, std::shared_ptr<Bsdf> nested, bool shadowing)
         : normals_(std::move(normals)), nested_(std::move(nested)), shadowing_(shadowing) {}
 
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         Frame f = frame(uv, wo);
         Vec3 wi_p = f.to_local(wi);
         if (!(wi.z * wi_p.z > 0)) return Rgb(0.0f);
         return nested_->eval(uv, f.to_local(wo), wi_p) * shadowing(f.n.z, wi.z);
     }
-    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         Frame f = frame(uv, wo);
         Vec3 wi_p = f.to_local(wi);
         if (!(wi.z * wi_p.z > 0)) return 0.0f;
         return nested_->pdf(uv, f.to_local(wo), wi_p);
     }
-    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const TexturePoint& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
         Frame f = frame(uv, wo);
         if (!nested_->sample(uv, f.to_local(wo), u_lobe, u, s)) return false;
         Vec3 wi = f.to_world(s->wi);
@@ -51,7 +51,7 @@ public:
 
 private:
     /// The tilted frame at uv, in local shading coordinates, for the camera-side direction wo.
-    Frame frame(const Vec2& uv, const Vec3& wo) const {
+    Frame frame(const TexturePoint& uv, const Vec3& wo) const {
         Rgb c = normals_->eval(uv);
         Vec3 n(2.0f * c.r - 1.0f, 2.0f * c.g - 1.0f, 2.0f * c.b - 1.0f);
         float l2 = length_sq(n);

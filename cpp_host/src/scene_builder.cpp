@@ -276,8 +276,13 @@ private:
             for (float v : img.rgb)
                 if (!(v >= 0) || !std::isfinite(v)) throw err(t, "image " + quote(path, 200) + " has negative or non-finite values");
             tex = make_bitmap_texture(std::move(img.rgb), img.width, img.height, f, w, to_uv);
+        } else if (t.type == "mesh_attribute") {
+            std::string name = t.get_string("name");
+            if (name != "vertex_color" && name != "face_color")
+                throw perr(t, "name", "must be vertex_color or face_color (the attributes mfrender reads from PLY r, g, b), got " + quote(name));
+            tex = make_mesh_attribute_texture(name, t.get_float("scale", 1.0f));
         } else {
-            throw err(t, "unsupported texture plugin " + quote(t.type) + " (supported: bitmap, checkerboard)");
+            throw err(t, "unsupported texture plugin " + quote(t.type) + " (supported: bitmap, checkerboard, mesh_attribute)");
         }
         t.check_all_used();
         textures_[&t] = tex;
@@ -661,6 +666,24 @@ private:
         return shape;
     }
 
+    /// Every mesh_attribute texture of the shape's BSDF must find its attribute on the shape
+    /// (Mitsuba refuses the render otherwise: "Invalid attribute requested").
+    void check_mesh_attributes(const SceneObject& o, const Shape& shape) {
+        std::vector<const SceneObject*> todo;
+        for (const Child* c : o.children_with_tag("bsdf")) todo.push_back(c->obj.get());
+        for (size_t k = 0; k < todo.size() && k < 4096; ++k) {  // the reader bounds nesting; 4096 bounds shared refs
+            const SceneObject& x = *todo[k];
+            if (x.tag == "texture" && x.type == "mesh_attribute" && x.has("name")) {
+                auto* mesh = dynamic_cast<const MeshShape*>(&shape);
+                std::string name = x.get_string("name");
+                if (!mesh || !mesh->mesh().attribute(name))
+                    throw err(o, "has no mesh attribute " + quote(name) + " for the mesh_attribute texture of its BSDF (" +
+                                     x.loc.str() + "; PLY files give vertex_color / face_color from r, g, b properties)");
+            }
+            for (const Child& c : x.children) todo.push_back(c.obj.get());
+        }
+    }
+
     /// Mitsuba's shapegroup: shapes that are rendered only through instances; checked here.
     void check_shapegroup(const SceneObject& group) {
         skip_if_broken(group);
@@ -701,6 +724,7 @@ private:
         if (t == "shapegroup") return check_shapegroup(o);
         if (t == "instance") return build_instance(o);
         std::shared_ptr<Shape> shape = build_geometry(o, instance_to_world);
+        check_mesh_attributes(o, *shape);
 
         auto bsdfs = o.children_with_tag("bsdf");
         if (bsdfs.size() > 1) throw err(o, "has more than one BSDF");
@@ -1144,9 +1168,10 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
               uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)
   textures    wherever listed below as (tex): a constant, <texture type="checkerboard"> (color0,
-              color1, to_uv) or <texture type="bitmap"> (filename .png/.jpg/.exr, filter_type
-              bilinear|nearest, wrap_mode repeat|mirror|clamp, raw, to_uv), nested with
-              name="param" or <ref name="param" id>
+              color1, to_uv), <texture type="bitmap"> (filename .png/.jpg/.exr, filter_type
+              bilinear|nearest, wrap_mode repeat|mirror|clamp, raw, to_uv) or <texture
+              type="mesh_attribute"> (name vertex_color | face_color: a PLY's r, g, b as stored;
+              scale), nested with name="param" or <ref name="param" id>
   bsdfs       diffuse (reflectance (tex)), conductor (material | eta,k; specular_reflectance (tex)),
               roughconductor (distribution beckmann|ggx|gtr, alpha | alpha_u,alpha_v, material |
               eta,k, specular_reflectance (tex), sample_visible; mfrender extension: shadowing
@@ -1198,7 +1223,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               (its R, G, B image; the moment AOVs are not written)
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. principled,
-blendbsdf, bumpmap, mesh_attribute textures, emissive media.
+blendbsdf, bumpmap, emissive media.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only
 (devices and pipes are refused); an attribute at most 1 MiB after $substitution; at most 100

@@ -120,6 +120,8 @@ void MeshShape::fill_hit(const Ray& ray, float t, unsigned prim, float u, float 
     }
     hit->shape = this;
     hit->prim = prim;
+    hit->mesh = &mesh_;
+    hit->bary = Vec2(u, v);
 }
 
 // ----------------------------------------------------------------------------------------------

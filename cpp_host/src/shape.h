@@ -34,6 +34,16 @@ struct SurfaceHit {
                // tangent s, along which alpha_u runs, is this made orthogonal to ns (Frame::shading)
     const Shape* shape = nullptr;
     uint32_t prim = 0;
+    const TriMesh* mesh = nullptr;  // the hit mesh (MeshShape), for mesh_attribute textures
+    Vec2 bary;                      // Embree's barycentrics (u, v) on a mesh triangle
+    /// Where the BSDF's textures are looked up.
+    TexturePoint texture_point() const {
+        TexturePoint t(uv);
+        t.mesh = mesh;
+        t.prim = prim;
+        t.bary = bary;
+        return t;
+    }
 };
 
 class Shape {

@@ -10,7 +10,8 @@
 # collections ship their meshes, textures and grids separately, so a referenced data file that is
 # missing from the copy is replaced by a stand-in of the same format (a small sphere for .obj/.ply/
 # .serialized, the .ply one with grey r, g, b per vertex and face for mesh_attribute textures; a
-# grey 8x4 .exr/.png/.jpg/.bmp, a 4^3 Mitsuba .vol with 1 or 3 channels, a flat .spd) and a missing <path> folder is created, inside the copy only, and the check is repeated.
+# grey 8x4 .exr/.png/.jpg/.bmp, a 4^3 Mitsuba .vol with 1 or 3 channels, a flat .spd) and a
+# missing <path> folder is created, inside the copy only, and the check is repeated.
 # Each scene is then one of:
 #   opens    --check succeeds (column 'stand-ins' says how many files were stood in for)
 #   refused  an unsupported plugin, parameter or element (listed: 'kind:plugin', 'plugin.parameter',

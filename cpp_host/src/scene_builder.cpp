@@ -1161,9 +1161,10 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               first axis of Mitsuba's coordinate_system(direction)); applied in order
   shapes      obj (flip_tex_coords), ply (ascii / binary_little_endian), serialized (shape_index;
               zlib), sphere (center, radius), rectangle, cube, disk, cylinder (radius, p0, p1;
-              open ends), shapegroup + instance (to_world; no emitters, media or nesting), sdfgrid (filename .vol |
-              .vdb with grid, normals; only as the mean surface of a macrofacet/gpis medium,
-              validated; never rendered as a surface of its own); to_world, flip_normals,
+              open ends), shapegroup + instance (to_world; no emitters, media or nesting),
+              sdfgrid (filename .vol | .vdb with grid, normals; only as the mean surface of a
+              macrofacet/gpis medium, validated; never rendered as a surface of its own);
+              to_world, flip_normals,
               face_normals; nested or referenced bsdf, area emitter (nested, or a top-level
               <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
               uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)

@@ -4,8 +4,9 @@
 //   * the map's value c gives the tilted normal n = normalize(2 c - 1) in the local shading
 //     frame; its tangent is the shading frame's s made orthogonal to n (dp/du plays no further
 //     part);
-//   * where the camera-side direction lies below n, the tangential part of n is mirrored,
-//     n = (-n_x, -n_y, n_z), so that it lies above again;
+//   * where the camera-side direction lies on different sides of n and of the shading normal,
+//     the tangential part of n is mirrored, n = (-n_x, -n_y, n_z) (seen from below the surface,
+//     e.g. inside a dielectric, a direction below n is therefore kept);
 //   * a direction must lie on the same side of both frames (else the BSDF is zero);
 //   * use_shadowing_function (default true) multiplies eval and the sampling weight, not the
 //     pdf, by the Smith-type shadowing of the light-side direction of Conty Estevez et al. 2019
@@ -59,7 +60,7 @@ private:
         // untilted frame there.
         if (!(l2 > 1e-12f) || !std::isfinite(l2)) return Frame();
         n = n / std::sqrt(l2);
-        if (dot(n, wo) < 0) n = Vec3(-n.x, -n.y, n.z);
+        if (dot(n, wo) * wo.z < 0) n = Vec3(-n.x, -n.y, n.z);
         return Frame::shading(n, Vec3(1, 0, 0));
     }
     /// Conty Estevez et al. 2019's shadowing of direction cosine cos_i for a normal tilted to

@@ -213,10 +213,17 @@ TEST_CASE(normal_map_as_mitsuba) {
     CHECK_NEAR(nm_plain->eval(cam, l1).r * kPi, 0.666831, 1e-4);  // the cosine alone
     CHECK_NEAR(nm_plain->eval(cam, l2).r * kPi, 0.737210, 1e-4);
     CHECK_NEAR(nm->eval(cam, Vec3(0, 0, 1)).r * kPi, 0.842701, 1e-4);  // untilted light: no shadowing
-    // camera below the tilted normal: its tangential part is mirrored
+    // camera above the surface but below the tilted normal: its tangential part is mirrored
     CHECK_NEAR(nm->eval(grazing_cam, l1).r * kPi, 0.781934, 1e-4);
     CHECK(nm->eval(grazing_cam, l2).r == 0.0f);
     CHECK(nm->eval(cam, normalize(Vec3(0.2f, 0.1f, -0.5f))).is_black());  // below the surface
+    // seen from below (a rough dielectric, alpha 0.3 GGX, bk7/air, no shadowing): the normal is
+    // mirrored only where the camera direction is on different sides of it and of the surface
+    auto glass = make_normal_map(normals, make_rough_dielectric(1.5046f, 1.000277f, nullptr, nullptr, MicrofacetType::GGX, 0.3f, 0.3f, true), false);
+    const Vec3 up = normalize(Vec3(-0.2f, 0.1f, 0.9f)), down = normalize(Vec3(0.1f, 0.3f, -0.7f));
+    CHECK_NEAR(glass->eval(normalize(Vec3(0.3f, -0.2f, -0.8f)), up).r, 0.625751, 1e-3);   // not mirrored
+    CHECK_NEAR(glass->eval(normalize(Vec3(0.9f, 0.6f, -0.1f)), down).r, 0.014938, 1e-4);  // mirrored
+    CHECK(glass->eval(normalize(Vec3(0.9f, 0.6f, -0.1f)), up).is_black());
     // anisotropic GGX (alpha_u 0.05, alpha_v 0.4): the tilted frame's tangent follows the shading
     // frame's s; Mitsuba: eval 1.29100, pdf 1.302237 at this direction
     ConductorIor perfect;

@@ -9,8 +9,9 @@
 # Each is checked with `mfrender --check` (every problem of a file in one run). Public scene
 # collections ship their meshes, textures and grids separately, so a referenced data file that is
 # missing from the copy is replaced by a stand-in of the same format (a small sphere for .obj/.ply/
-# .serialized, a grey 8x4 .exr/.png/.jpg/.bmp, a 4^3 Mitsuba .vol with 1 or 3 channels, a flat
-# .spd) and a missing <path> folder is created, inside the copy only, and the check is repeated.
+# .serialized, the .ply one with grey r, g, b per vertex and face for mesh_attribute textures; a
+# grey 8x4 .exr/.png/.jpg/.bmp, a 4^3 Mitsuba .vol with 1 or 3 channels, a flat .spd) and a
+# missing <path> folder is created, inside the copy only, and the check is repeated.
 # Each scene is then one of:
 #   opens    --check succeeds (column 'stand-ins' says how many files were stood in for)
 #   refused  an unsupported plugin, parameter or element (listed: 'kind:plugin', 'plugin.parameter',
@@ -64,12 +65,16 @@ def obj_bytes():
     return s.encode()
 
 def ply_bytes():
+    """The sphere with a grey r, g, b per vertex and per face: the vertex_color and face_color
+    attributes that a mesh_attribute texture may read (Mitsuba's PLY reader makes them of r, g, b)."""
     p, n, t, f = sphere()
     h = ('ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n'
          'property float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\n'
-         'element face %d\nproperty list uchar int vertex_indices\nend_header\n') % (len(p), len(f))
-    h += ''.join('%g %g %g %g %g %g %g %g\n' % (p[k] + n[k] + t[k]) for k in range(len(p)))
-    h += ''.join('3 %d %d %d\n' % tri for tri in f)
+         'property float r\nproperty float g\nproperty float b\n'
+         'element face %d\nproperty list uchar int vertex_indices\nproperty float r\nproperty float g\nproperty float b\n'
+         'end_header\n') % (len(p), len(f))
+    h += ''.join('%g %g %g %g %g %g %g %g 0.5 0.5 0.5\n' % (p[k] + n[k] + t[k]) for k in range(len(p)))
+    h += ''.join('3 %d %d %d 0.5 0.5 0.5\n' % tri for tri in f)
     return h.encode()
 
 def serialized_bytes(shapes=8):

@@ -93,15 +93,15 @@ Rgb conductor_fresnel(const ConductorIor& ior, float cos_i) {
 class Diffuse final : public Bsdf {
 public:
     explicit Diffuse(std::shared_ptr<const Texture> r) : r_(std::move(r)) {}
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         return r_->eval(uv) * (kInvPi * wi.z);
     }
-    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const TexturePoint&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         return wi.z * kInvPi;
     }
-    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const TexturePoint& uv, const Vec3& wo, float, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         s->wi = cosine_hemisphere(u);
         if (s->wi.z <= 0) return false;
@@ -121,9 +121,9 @@ private:
 class Conductor final : public Bsdf {
 public:
     Conductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec) : ior_(ior), spec_(std::move(spec)) {}
-    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec2& uv, const Vec3& wo, float, const Vec2&, BsdfSample* s) const override {
+    Rgb eval(const TexturePoint&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const TexturePoint&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const TexturePoint& uv, const Vec3& wo, float, const Vec2&, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         s->wi = Vec3(-wo.x, -wo.y, wo.z);
         s->pdf = 1.0f;
@@ -155,7 +155,7 @@ class RoughConductor final : public Bsdf {
 public:
     RoughConductor(const ConductorIor& ior, std::shared_ptr<const Texture> spec, Holder mf)
         : ior_(ior), spec_(std::move(spec)), mf_(std::move(mf)) {}
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         Vec3 h = normalize(wo + wi);
         float D = dist().D(h);
@@ -163,7 +163,7 @@ public:
         float G = dist().G(wo, wi, h);
         return spec_->eval(uv) * conductor_fresnel(ior_, dot(wo, h)) * (D * G / (4.0f * wo.z));
     }
-    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const TexturePoint&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         Vec3 h = normalize(wo + wi);
         float d = dot(wo, h);
@@ -171,7 +171,7 @@ public:
         return dist().pdf(wo, h) / (4.0f * d);
     }
     // u_lobe (one lobe here) is the third uniform of the library's visible-normal sampler.
-    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const TexturePoint& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         float mpdf;
         Vec3 m = sample_normal(dist(), wo, u, u_lobe, &mpdf);
@@ -202,9 +202,9 @@ private:
 class Dielectric final : public Bsdf {
 public:
     Dielectric(float eta, const Rgb& r, const Rgb& t) : eta_(eta), r_(r), t_(t) {}
-    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec2&, const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
+    Rgb eval(const TexturePoint&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const TexturePoint&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const TexturePoint&, const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
         if (wo.z == 0) return false;
         float cos_t;
         float F = fresnel_dielectric(wo.z, eta_, &cos_t);
@@ -245,16 +245,16 @@ public:
     RoughDielectric(float eta, std::shared_ptr<const Texture> r, std::shared_ptr<const Texture> t, MicrofacetType type,
                     float au, float av, bool vis)
         : eta_(eta), r_(std::move(r)), t_(std::move(t)), mf_(type, au, av, vis) {}
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         float pdf;
         return eval_pdf(uv, wo, wi, &pdf);
     }
-    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         float pdf;
         eval_pdf(uv, wo, wi, &pdf);
         return pdf;
     }
-    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const TexturePoint& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
         if (wo.z == 0) return false;
         const float side = wo.z > 0 ? 1.0f : -1.0f;
         float mpdf;
@@ -289,7 +289,7 @@ public:
 
 private:
     /// f |cos wi| and the pdf of sample() (Mitsuba's eval / pdf, radiance transport).
-    Rgb eval_pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi, float* pdf_out) const {
+    Rgb eval_pdf(const TexturePoint& uv, const Vec3& wo, const Vec3& wi, float* pdf_out) const {
         *pdf_out = 0.0f;
         if (wo.z == 0 || wi.z == 0) return Rgb(0.0f);
         const bool reflect = wo.z * wi.z > 0;
@@ -328,9 +328,9 @@ private:
 class ThinDielectric final : public Bsdf {
 public:
     ThinDielectric(float eta, const Rgb& r, const Rgb& t) : eta_(eta), r_(r), t_(t) {}
-    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec2&, const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
+    Rgb eval(const TexturePoint&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const TexturePoint&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const TexturePoint&, const Vec3& wo, float u_lobe, const Vec2&, BsdfSample* s) const override {
         if (wo.z == 0) return false;
         float R = fresnel_dielectric(std::fabs(wo.z), eta_, nullptr), T = 1.0f - R;
         if (R < 1.0f) R += T * T * R / (1.0f - R * R);
@@ -382,15 +382,15 @@ public:
     Plastic(float eta, std::shared_ptr<const Texture> diffuse, const Rgb& specular, bool nonlinear, float spec_weight)
         : eta_(eta), diffuse_(std::move(diffuse)), specular_(specular), nonlinear_(nonlinear), spec_weight_(spec_weight),
           fdr_int_(fresnel_diffuse_reflectance(1.0f / eta)) {}
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         return diffuse_term(uv, wo.z, wi.z) * wi.z;
     }
-    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const TexturePoint&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         return prob_diffuse(wo.z) * wi.z * kInvPi;
     }
-    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const TexturePoint& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         float F_o = fresnel_dielectric(wo.z, eta_, nullptr);
         float p_d = prob_diffuse(wo.z), p_s = 1.0f - p_d;
@@ -415,7 +415,7 @@ public:
 
 private:
     /// f_d without the cosine.
-    Rgb diffuse_term(const Vec2& uv, float cos_o, float cos_i) const {
+    Rgb diffuse_term(const TexturePoint& uv, float cos_o, float cos_i) const {
         Rgb d = diffuse_->eval(uv);
         for (int c = 0; c < 3; ++c) d[c] /= 1.0f - (nonlinear_ ? d[c] * fdr_int_ : fdr_int_);
         float F_o = fresnel_dielectric(cos_o, eta_, nullptr), F_i = fresnel_dielectric(cos_i, eta_, nullptr);
@@ -463,15 +463,15 @@ public:
         }
         internal_r_ = float(2.0 * internal / kTableSize);
     }
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
         return eval_cos(uv, wo, wi);
     }
-    float pdf(const Vec2&, const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const TexturePoint&, const Vec3& wo, const Vec3& wi) const override {
         if (wo.z <= 0 || wi.z <= 0) return 0.0f;
         return pdf_cos(wo, wi);
     }
-    bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const TexturePoint& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const override {
         if (wo.z <= 0) return false;
         Vec3 wi;
         if (u_lobe < prob_specular(wo.z)) {
@@ -513,7 +513,7 @@ private:
         float spec = d > 0 ? mf_.pdf(wo, h) / (4.0f * d) : 0.0f;
         return p_s * spec + (1.0f - p_s) * wi.z * kInvPi;
     }
-    Rgb eval_cos(const Vec2& uv, const Vec3& wo, const Vec3& wi) const {
+    Rgb eval_cos(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const {
         Vec3 h = normalize(wo + wi);
         float spec = fresnel_dielectric(dot(wo, h), eta_, nullptr) * mf_.D(h) * mf_.G(wo, wi, h) / (4.0f * wo.z);
         Rgb value = specular_ ? specular_->eval(uv) * spec : Rgb(spec);
@@ -532,9 +532,9 @@ private:
 
 class NullBsdf final : public Bsdf {
 public:
-    Rgb eval(const Vec2&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
-    float pdf(const Vec2&, const Vec3&, const Vec3&) const override { return 0.0f; }
-    bool sample(const Vec2&, const Vec3&, float, const Vec2&, BsdfSample*) const override { return false; }
+    Rgb eval(const TexturePoint&, const Vec3&, const Vec3&) const override { return Rgb(0.0f); }
+    float pdf(const TexturePoint&, const Vec3&, const Vec3&) const override { return 0.0f; }
+    bool sample(const TexturePoint&, const Vec3&, float, const Vec2&, BsdfSample*) const override { return false; }
     bool is_delta() const override { return true; }
     bool is_null() const override { return true; }
     std::string name() const override { return "null"; }
@@ -544,13 +544,13 @@ class TwoSided final : public Bsdf {
 public:
     TwoSided(std::shared_ptr<Bsdf> f, std::shared_ptr<Bsdf> b) : f_(std::move(f)), b_(std::move(b)) {}
     static Vec3 flip(const Vec3& v) { return Vec3(v.x, v.y, -v.z); }
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         return wo.z >= 0 ? f_->eval(uv, wo, wi) : b_->eval(uv, flip(wo), flip(wi));
     }
-    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override {
+    float pdf(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override {
         return wo.z >= 0 ? f_->pdf(uv, wo, wi) : b_->pdf(uv, flip(wo), flip(wi));
     }
-    bool sample(const Vec2& uv, const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
+    bool sample(const TexturePoint& uv, const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
         if (wo.z >= 0) return f_->sample(uv, wo, ul, u, s);
         if (!b_->sample(uv, flip(wo), ul, u, s)) return false;
         s->wi = flip(s->wi);
@@ -566,14 +566,14 @@ private:
 class Mask final : public Bsdf {
 public:
     Mask(std::shared_ptr<const Texture> opacity, std::shared_ptr<Bsdf> nested) : opacity_(std::move(opacity)), nested_(std::move(nested)) {}
-    Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override { return nested_->eval(uv, wo, wi); }
-    float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const override { return nested_->pdf(uv, wo, wi); }
-    bool sample(const Vec2& uv, const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
+    Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override { return nested_->eval(uv, wo, wi); }
+    float pdf(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const override { return nested_->pdf(uv, wo, wi); }
+    bool sample(const TexturePoint& uv, const Vec3& wo, float ul, const Vec2& u, BsdfSample* s) const override {
         return nested_->sample(uv, wo, ul, u, s);
     }
     bool is_delta() const override { return nested_->is_delta(); }
     // Mitsuba clamps the opacity to [0, 1]
-    float transparency(const Vec2& uv) const override { return 1.0f - std::clamp(opacity_->eval_1(uv), 0.0f, 1.0f); }
+    float transparency(const TexturePoint& uv) const override { return 1.0f - std::clamp(opacity_->eval_1(uv), 0.0f, 1.0f); }
     std::string name() const override { return "mask"; }
 
 private:

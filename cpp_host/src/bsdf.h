@@ -28,9 +28,9 @@ class Bsdf {
 public:
     virtual ~Bsdf() = default;
     /// f(wo, wi) |cos wi| for the non-Dirac part, at texture coordinates uv (SurfaceHit::uv).
-    virtual Rgb eval(const Vec2& uv, const Vec3& wo, const Vec3& wi) const = 0;
-    virtual float pdf(const Vec2& uv, const Vec3& wo, const Vec3& wi) const = 0;
-    virtual bool sample(const Vec2& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const = 0;
+    virtual Rgb eval(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const = 0;
+    virtual float pdf(const TexturePoint& uv, const Vec3& wo, const Vec3& wi) const = 0;
+    virtual bool sample(const TexturePoint& uv, const Vec3& wo, float u_lobe, const Vec2& u, BsdfSample* s) const = 0;
     /// The same at uv = (0, 0) (untextured BSDFs, tests).
     Rgb eval(const Vec3& wo, const Vec3& wi) const { return eval(Vec2(), wo, wi); }
     float pdf(const Vec3& wo, const Vec3& wi) const { return pdf(Vec2(), wo, wi); }
@@ -41,7 +41,7 @@ public:
     virtual bool is_null() const { return false; }
     /// Mitsuba's `mask`: the probability that the surface is absent at uv (1 - opacity). The
     /// integrator decides presence first; eval, pdf and sample describe the surface when present.
-    virtual float transparency(const Vec2& uv) const {
+    virtual float transparency(const TexturePoint& uv) const {
         (void)uv;
         return 0.0f;
     }
@@ -92,5 +92,8 @@ std::shared_ptr<Bsdf> make_twosided(std::shared_ptr<Bsdf> front, std::shared_ptr
 /// Mitsuba's mask: `nested` where present, absent with probability 1 - opacity (the texture's
 /// eval_1, clamped to [0, 1]).
 std::shared_ptr<Bsdf> make_mask(std::shared_ptr<const Texture> opacity, std::shared_ptr<Bsdf> nested);
+/// Mitsuba's normalmap: `nested` in the shading frame tilted by the `normals` texture (values
+/// 2 c - 1), with Mitsuba 3.9.1's side rules and optional shadowing (bsdf_normalmap.cpp).
+std::shared_ptr<Bsdf> make_normal_map(std::shared_ptr<const Texture> normals, std::shared_ptr<Bsdf> nested, bool shadowing);
 
 }  // namespace mf

@@ -25,7 +25,7 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
             // Mitsuba's volpath sees through a mask with its transparency (eval_null_transmission);
             // its path tests visibility, which any surface blocks (the mask's null events are
             // Dirac then: emitters reached through it count fully, see Li)
-            const float pass = vol ? h.shape->bsdf->transparency(h.uv) : 0.0f;
+            const float pass = vol ? h.shape->bsdf->transparency(h.texture_point()) : 0.0f;
             if (!(pass > 0)) return Rgb(0.0f);
             T *= pass;
         }
@@ -174,7 +174,8 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         }
 
         const Bsdf& bsdf = *shape->bsdf;
-        const float pass = bsdf.transparency(hit.uv);
+        const TexturePoint at = hit.texture_point();
+        const float pass = bsdf.transparency(at);
         const bool absent = pass > 0 && sampler.next_1d() < pass;  // a mask's hole (Mitsuba's null lobe)
         if (absent && !vol) {
             // Mitsuba's path: the mask's absence is a Dirac null event and a bounce of the path
@@ -208,9 +209,9 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             EmitterSample es;
             if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0 && (es.delta || nee_non_delta)) {
                 Vec3 wi_l = frame.to_local(es.wi);
-                Rgb f = bsdf.eval(hit.uv, wo_l, wi_l);
+                Rgb f = bsdf.eval(at, wo_l, wi_l);
                 if (!f.is_black()) {
-                    float f_pdf = bsdf.pdf(hit.uv, wo_l, wi_l);
+                    float f_pdf = bsdf.pdf(at, wo_l, wi_l);
                     const Medium* m = medium;
                     if (vol && shape->is_medium_transition()) m = shape->target_medium(hit.ng, es.wi);
                     Vec3 o = offset_ray_origin(hit.p, hit.ng, es.wi);
@@ -226,7 +227,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         }
 
         BsdfSample bs;
-        if (!bsdf.sample(hit.uv, wo_l, sampler.next_1d(), sampler.next_2d(), &bs)) break;
+        if (!bsdf.sample(at, wo_l, sampler.next_1d(), sampler.next_2d(), &bs)) break;
         Vec3 wi = frame.to_world(bs.wi);
         beta *= bs.weight;
         if (beta.is_black() || !beta.finite()) break;

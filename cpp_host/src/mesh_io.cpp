@@ -65,6 +65,13 @@ void TriMesh::make_face_normals() {
         if (!uv.empty()) nuv.push_back(uv[idx[k]]);
         nidx.push_back(uint32_t(k));
     }
+    for (Attribute& a : attributes) {  // vertex attributes follow their split vertices
+        if (a.per_face) continue;
+        std::vector<Rgb> nv;
+        nv.reserve(idx.size());
+        for (uint32_t i : idx) nv.push_back(a.values[i]);
+        a.values.swap(nv);
+    }
     p.swap(np);
     uv.swap(nuv);
     idx.swap(nidx);
@@ -287,6 +294,22 @@ private:
 
 }  // namespace
 
+/// Mitsuba's PLY reader groups the scalar properties r, g, b of an element into its "color"
+/// attribute (values as stored: Mitsuba 3.9.1 does not rescale uchar colours).
+static bool ply_color_props(const PlyElement& e, int color[3]) {
+    color[0] = color[1] = color[2] = -1;
+    for (size_t k = 0; k < e.props.size(); ++k) {
+        if (e.props[k].is_list) continue;
+        const std::string& n = e.props[k].name;
+        if (n == "r") color[0] = int(k); else if (n == "g") color[1] = int(k); else if (n == "b") color[2] = int(k);
+    }
+    return color[0] >= 0 && color[1] >= 0 && color[2] >= 0;
+}
+
+static Rgb ply_color(const std::vector<double>& vals, const int color[3]) {
+    return Rgb(float(vals[size_t(color[0])]), float(vals[size_t(color[1])]), float(vals[size_t(color[2])]));
+}
+
 TriMesh load_ply(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open PLY file \"" + path + "\"");
@@ -364,6 +387,9 @@ TriMesh load_ply(const std::string& path) {
                 else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") iv = kk;
             }
             if (ix < 0 || iy < 0 || iz < 0) file_error(path, 0, "vertex element lacks x/y/z properties");
+            int color[3];
+            bool colors = ply_color_props(e, color);
+            TriMesh::Attribute vertex_color{"vertex_color", false, {}};
             bool normals = inx >= 0 && iny >= 0 && inz >= 0, uvs = iu >= 0 && iv >= 0;
             std::vector<double> vals(e.props.size());
             m.p.resize(e.count);
@@ -384,13 +410,19 @@ TriMesh load_ply(const std::string& path) {
                 if (!all_finite(m.p[i])) file_error(path, 0, "non-finite vertex position");
                 if (normals) m.n[i] = normalize(Vec3(float(vals[size_t(inx)]), float(vals[size_t(iny)]), float(vals[size_t(inz)])));
                 if (uvs) m.uv[i] = Vec2(float(vals[size_t(iu)]), float(vals[size_t(iv)]));
+                if (colors) vertex_color.values.push_back(ply_color(vals, color));
             }
+            if (colors) m.attributes.push_back(std::move(vertex_color));
         } else if (e.name == "face") {
             int ii = -1;
             for (size_t k = 0; k < e.props.size(); ++k)
                 if (e.props[k].is_list && (e.props[k].name == "vertex_indices" || e.props[k].name == "vertex_index"))
                     ii = int(k);
             if (ii < 0) file_error(path, 0, "face element lacks a vertex_indices list");
+            int color[3];
+            bool colors = ply_color_props(e, color);
+            TriMesh::Attribute face_color{"face_color", true, {}};
+            std::vector<double> vals(e.props.size());
             for (size_t i = 0; i < e.count; ++i) {
                 std::vector<uint32_t> poly;
                 for (size_t k = 0; k < e.props.size(); ++k) {
@@ -408,7 +440,7 @@ TriMesh load_ply(const std::string& path) {
                             }
                         }
                     } else {
-                        rd.read(p.type);
+                        vals[k] = rd.read(p.type);
                     }
                 }
                 if (poly.size() < 3) file_error(path, 0, "face " + std::to_string(i) + " has fewer than 3 vertices");
@@ -416,8 +448,10 @@ TriMesh load_ply(const std::string& path) {
                     m.idx.push_back(poly[0]);
                     m.idx.push_back(poly[j]);
                     m.idx.push_back(poly[j + 1]);
+                    if (colors) face_color.values.push_back(ply_color(vals, color));
                 }
             }
+            if (colors) m.attributes.push_back(std::move(face_color));
         } else {
             for (size_t i = 0; i < e.count; ++i)
                 for (const PlyProp& p : e.props) {

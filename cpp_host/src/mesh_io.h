@@ -13,6 +13,19 @@ struct TriMesh {
     std::vector<Vec3> n;          // per-vertex normals (empty if none)
     std::vector<Vec2> uv;         // per-vertex texture coordinates (empty if none)
     std::vector<uint32_t> idx;    // 3 indices per triangle
+    /// Mitsuba's mesh attributes read from PLY files: "vertex_color" (per vertex, from the r, g, b
+    /// properties) and "face_color" (per face, after triangulation one value per triangle).
+    struct Attribute {
+        std::string name;
+        bool per_face = false;
+        std::vector<Rgb> values;
+    };
+    std::vector<Attribute> attributes;
+    const Attribute* attribute(const std::string& name) const {
+        for (const Attribute& a : attributes)
+            if (a.name == name) return &a;
+        return nullptr;
+    }
     size_t num_triangles() const { return idx.size() / 3; }
     void transform(const Mat4& m);  // positions, normals (inverse transpose), flips winding if det < 0
     void compute_vertex_normals();  // angle-weighted smooth normals from the winding

@@ -216,9 +216,16 @@ private:
             std::shared_ptr<Bsdf> nested = build_bsdf(*kids[0]->obj);
             if (nested->is_null() || nested->name() == "mask") throw err(o, "the nested BSDF of a mask cannot be null or a mask");
             b = make_mask(texture_param(o, "opacity", Rgb(0.5f)), nested);
+        } else if (t == "normalmap") {
+            auto kids = o.children_with_tag("bsdf");
+            if (kids.size() != 1) throw err(o, "expects one nested <bsdf>");
+            std::shared_ptr<Bsdf> nested = build_bsdf(*kids[0]->obj);
+            if (nested->is_null() || nested->name() == "mask") throw err(o, "the nested BSDF of a normalmap cannot be null or a mask");
+            if (!o.child_named("texture", "normalmap") && !o.has("normalmap")) throw err(o, "needs a \"normalmap\" texture");
+            b = make_normal_map(texture_param(o, "normalmap", Rgb(0.5f, 0.5f, 1.0f)), nested, o.get_bool("use_shadowing_function", true));
         } else {
             throw err(o, "unsupported BSDF plugin \"" + t +
-                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided, mask)");
+                             "\" (supported: diffuse, conductor, roughconductor, dielectric, thindielectric, roughdielectric, plastic, roughplastic, null, twosided, mask, normalmap)");
         }
         o.check_all_used();
         bsdfs_[&o] = b;
@@ -269,8 +276,13 @@ private:
             for (float v : img.rgb)
                 if (!(v >= 0) || !std::isfinite(v)) throw err(t, "image " + quote(path, 200) + " has negative or non-finite values");
             tex = make_bitmap_texture(std::move(img.rgb), img.width, img.height, f, w, to_uv);
+        } else if (t.type == "mesh_attribute") {
+            std::string name = t.get_string("name");
+            if (name != "vertex_color" && name != "face_color")
+                throw perr(t, "name", "must be vertex_color or face_color (the attributes mfrender reads from PLY r, g, b), got " + quote(name));
+            tex = make_mesh_attribute_texture(name, t.get_float("scale", 1.0f));
         } else {
-            throw err(t, "unsupported texture plugin " + quote(t.type) + " (supported: bitmap, checkerboard)");
+            throw err(t, "unsupported texture plugin " + quote(t.type) + " (supported: bitmap, checkerboard, mesh_attribute)");
         }
         t.check_all_used();
         textures_[&t] = tex;
@@ -555,9 +567,9 @@ private:
     // ------------------------------------------------------------------ shapes
     /// The geometry of a <shape> (its type's parameters, to_world, flip_normals); the caller
     /// adds BSDF, media and emitter.
-    std::shared_ptr<Shape> build_geometry(const SceneObject& o) {
+    std::shared_ptr<Shape> build_geometry(const SceneObject& o, const Mat4& instance_to_world = Mat4()) {
         const std::string& t = o.type;
-        Mat4 to_world = o.get_transform("to_world", Mat4());
+        Mat4 to_world = instance_to_world * o.get_transform("to_world", Mat4());
         if (std::fabs(to_world.det3()) < 1e-30) throw perr(o, "to_world", "is singular");
         bool flip = o.get_bool("flip_normals", false);
         std::shared_ptr<Shape> shape;
@@ -610,23 +622,109 @@ private:
                 });
             }
             shape = ms;
+        } else if (t == "cylinder") {
+            // Mitsuba's cylinder: to_world * translate(p0) * frame(p1 - p0) * scale(r, r, |p1 - p0|)
+            // around the canonical one (radius 1, z in [0, 1], no caps)
+            Vec3 p0 = o.get_point("p0", Vec3(0, 0, 0)), p1 = o.get_point("p1", Vec3(0, 0, 1));
+            float r = o.get_float("radius", 1.0f), len = length(p1 - p0);
+            if (!(r > 0) || !std::isfinite(r)) throw perr(o, "radius", "must be positive");
+            if (!(len > 0) || !std::isfinite(len)) throw err(o, "p0 and p1 must be distinct finite points");
+            Frame axis(normalize(p1 - p0));
+            Mat4 frame;
+            for (int row = 0; row < 3; ++row) {
+                frame.m[row][0] = axis.s[row];
+                frame.m[row][1] = axis.t[row];
+                frame.m[row][2] = axis.n[row];
+            }
+            Mat4 local = to_world * Mat4::translate(p0.x, p0.y, p0.z) * frame * Mat4::scale(r, r, len);
+            TriMesh m = make_cylinder_mesh();
+            m.transform(local);
+            if (flip) m.flip_normals();
+            auto ms = std::make_shared<MeshShape>(std::move(m), t, flip);
+            // uv = (phi / 2 pi, z) and dp/du = local * (-y, x, 0) * 2 pi at the canonical point (x, y, z)
+            Mat4 inv = local.inverse();
+            ms->set_parameterization([=](const Vec3& p, Vec2* uv, Vec3* dpdu) {
+                Vec3 l = inv.point(p);
+                float u = std::atan2(l.y, l.x) * (0.5f * kInvPi);
+                if (u < 0) u += 1.0f;
+                *uv = Vec2(u, l.z);
+                float rl = std::sqrt(l.x * l.x + l.y * l.y);
+                Vec3 tangent = rl > 0 ? Vec3(-l.y / rl, l.x / rl, 0.0f) : Vec3(0, 1, 0);
+                *dpdu = local.vector(tangent * (2.0f * kPi));
+            });
+            shape = ms;
         } else if (t == "sdfgrid") {
             if (flip) throw perr(o, "flip_normals", "is not supported by an sdfgrid mean surface (negate its values instead)");
             shape = std::make_shared<SdfGridShape>(load_sdf_grid(o, to_world));
         } else {
             throw err(o, "unsupported shape plugin \"" + t +
-                             "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk, sdfgrid)");
+                             "\" (supported: obj, ply, serialized, sphere, rectangle, cube, disk, cylinder, sdfgrid, "
+                             "shapegroup, instance)");
         }
         shape->id = o.id;
         shape->loc = o.loc;
         return shape;
     }
 
-    void build_shape(const std::shared_ptr<SceneObject>& op) {
+    /// Every mesh_attribute texture of the shape's BSDF must find its attribute on the shape
+    /// (Mitsuba refuses the render otherwise: "Invalid attribute requested").
+    void check_mesh_attributes(const SceneObject& o, const Shape& shape) {
+        std::vector<const SceneObject*> todo;
+        for (const Child* c : o.children_with_tag("bsdf")) todo.push_back(c->obj.get());
+        for (size_t k = 0; k < todo.size() && k < 4096; ++k) {  // the reader bounds nesting; 4096 bounds shared refs
+            const SceneObject& x = *todo[k];
+            if (x.tag == "texture" && x.type == "mesh_attribute" && x.has("name")) {
+                auto* mesh = dynamic_cast<const MeshShape*>(&shape);
+                std::string name = x.get_string("name");
+                if (!mesh || !mesh->mesh().attribute(name))
+                    throw err(o, "has no mesh attribute " + quote(name) + " for the mesh_attribute texture of its BSDF (" +
+                                     x.loc.str() + "; PLY files give vertex_color / face_color from r, g, b properties)");
+            }
+            for (const Child& c : x.children) todo.push_back(c.obj.get());
+        }
+    }
+
+    /// Mitsuba's shapegroup: shapes that are rendered only through instances; checked here.
+    void check_shapegroup(const SceneObject& group) {
+        skip_if_broken(group);
+        for (const Child* c : group.children_with_tag("emitter"))
+            throw Error(c->loc, group.describe() + ": emitters cannot be instanced (as in Mitsuba)");
+        for (const Child* c : group.children_with_tag("shape")) {
+            const SceneObject& member = *c->obj;
+            if (member.type == "shapegroup" || member.type == "instance")
+                throw Error(c->loc, group.describe() + ": nested instancing is not supported (as in Mitsuba)");
+            if (member.type == "sdfgrid" || !member.children_with_tag("emitter").empty() ||
+                !member.children_with_tag("medium").empty())
+                throw Error(c->loc, group.describe() + ": " + member.describe() +
+                                        " cannot be instanced (emitters, media and sdfgrid mean surfaces are refused)");
+        }
+        group.check_all_used();
+    }
+
+    /// Mitsuba's instance: the shapes of one referenced shapegroup, placed by the instance's
+    /// to_world. mfrender builds each member as its own shape with to_world = instance * member
+    /// (the same surfaces, uv and dp/du as Mitsuba's instanced BVH; memory grows per instance).
+    void build_instance(const SceneObject& o) {
+        skip_if_broken(o);
+        auto groups = o.children_with_tag("shape");
+        if (groups.size() != 1 || groups[0]->obj->type != "shapegroup")
+            throw err(o, "expects exactly one <ref> to a <shape type=\"shapegroup\">");
+        const SceneObject& group = *groups[0]->obj;
+        check_shapegroup(group);
+        Mat4 to_world = o.get_transform("to_world", Mat4());
+        if (std::fabs(to_world.det3()) < 1e-30) throw perr(o, "to_world", "is singular");
+        o.check_all_used();
+        for (const Child* c : group.children_with_tag("shape")) build_shape(c->obj, to_world);
+    }
+
+    void build_shape(const std::shared_ptr<SceneObject>& op, const Mat4& instance_to_world = Mat4()) {
         const SceneObject& o = *op;
         skip_if_broken(o);
         const std::string& t = o.type;
-        std::shared_ptr<Shape> shape = build_geometry(o);
+        if (t == "shapegroup") return check_shapegroup(o);
+        if (t == "instance") return build_instance(o);
+        std::shared_ptr<Shape> shape = build_geometry(o, instance_to_world);
+        check_mesh_attributes(o, *shape);
 
         auto bsdfs = o.children_with_tag("bsdf");
         if (bsdfs.size() > 1) throw err(o, "has more than one BSDF");
@@ -1053,6 +1151,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               including file's folder, the working directory), id="..." and <ref id>/<ref name id>
               (forward references too), <alias id as>
   properties  integer float boolean string rgb vector point transform
+              spectrum type="srgb" (<rgb name="color">: the colour, bounded like an <rgb>)
               spectrum (a constant, wavelength:value lists or a .spd file, converted to linear sRGB
               as Mitsuba 3's RGB variants do: CIE 1931 and D65 for reflectances, Y-normalised emission)
               <rgb> outside emitters must lie in [0, 1] (Mitsuba's RGB variants refuse it) except
@@ -1061,16 +1160,19 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               matrix (16 or 9 values, row-major), lookat (origin, target, up; without up: the
               first axis of Mitsuba's coordinate_system(direction)); applied in order
   shapes      obj (flip_tex_coords), ply (ascii / binary_little_endian), serialized (shape_index;
-              zlib), sphere (center, radius), rectangle, cube, disk, sdfgrid (filename .vol |
-              .vdb with grid, normals; only as the mean surface of a macrofacet/gpis medium,
-              validated; never rendered as a surface of its own); to_world, flip_normals,
+              zlib), sphere (center, radius), rectangle, cube, disk, cylinder (radius, p0, p1;
+              open ends), shapegroup + instance (to_world; no emitters, media or nesting),
+              sdfgrid (filename .vol | .vdb with grid, normals; only as the mean surface of a
+              macrofacet/gpis medium, validated; never rendered as a surface of its own);
+              to_world, flip_normals,
               face_normals; nested or referenced bsdf, area emitter (nested, or a top-level
               <emitter type="area" id> referenced by the shape), <medium name="interior|exterior">
               uv and dp/du as Mitsuba 3 (anisotropic roughness follows dp/du: Frame::shading)
   textures    wherever listed below as (tex): a constant, <texture type="checkerboard"> (color0,
-              color1, to_uv) or <texture type="bitmap"> (filename .png/.jpg/.exr, filter_type
-              bilinear|nearest, wrap_mode repeat|mirror|clamp, raw, to_uv), nested with
-              name="param" or <ref name="param" id>
+              color1, to_uv), <texture type="bitmap"> (filename .png/.jpg/.exr, filter_type
+              bilinear|nearest, wrap_mode repeat|mirror|clamp, raw, to_uv) or <texture
+              type="mesh_attribute"> (name vertex_color | face_color: a PLY's r, g, b as stored;
+              scale), nested with name="param" or <ref name="param" id>
   bsdfs       diffuse (reflectance (tex)), conductor (material | eta,k; specular_reflectance (tex)),
               roughconductor (distribution beckmann|ggx|gtr, alpha | alpha_u,alpha_v, material |
               eta,k, specular_reflectance (tex), sample_visible; mfrender extension: shadowing
@@ -1082,7 +1184,9 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               alpha | alpha_u,alpha_v, sample_visible), plastic, roughplastic (int_ior, ext_ior,
               diffuse_reflectance (tex), specular_reflectance ((tex) when rough), nonlinear;
               rough: distribution, isotropic alpha, sample_visible), null, twosided (one or two
-              bsdfs), mask (opacity (tex), one nested bsdf: absent with probability 1 - opacity)
+              bsdfs), mask (opacity (tex), one nested bsdf: absent with probability 1 - opacity),
+              normalmap (normalmap (tex, values 2c - 1 in the shading frame), one nested bsdf,
+              use_shadowing_function; Mitsuba 3.9.1's side rules and Conty Estevez 2019 shadowing)
               conductor materials: none, Ag, Al, Au, Cr, Cu
   media       homogeneous (sigma_t, albedo, scale; <phase type="isotropic|hg"> with g)
               heterogeneous (sigma_t, albedo: constants or <volume> constvolume | gridvolume;
@@ -1120,7 +1224,7 @@ in memory as Mitsuba does: camelCase names, lookAt, diffuseReflectance):
               (its R, G, B image; the moment AOVs are not written)
 Unknown elements, plugin types or parameters are errors; every problem of a file is listed.
 Not supported (refused with the element's file:line): other plugins, e.g. principled,
-blendbsdf, bumpmap, normalmap, instance/shapegroup, mesh_attribute textures, emissive media.
+blendbsdf, bumpmap, emissive media.
 Reader limits: XML elements (and reference chains) nested at most 64 deep; <include> at most
 15 deep; an XML file at most 64 MiB, all of a scene's XML at most 256 MiB, regular files only
 (devices and pipes are refused); an attribute at most 1 MiB after $substitution; at most 100

@@ -120,6 +120,8 @@ void MeshShape::fill_hit(const Ray& ray, float t, unsigned prim, float u, float 
     }
     hit->shape = this;
     hit->prim = prim;
+    hit->mesh = &mesh_;
+    hit->bary = Vec2(u, v);
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -252,6 +254,24 @@ TriMesh make_disk_mesh(int segments) {
         m.idx.push_back(0);
         m.idx.push_back(uint32_t(1 + i));
         m.idx.push_back(uint32_t(1 + (i + 1) % segments));
+    }
+    return m;
+}
+
+TriMesh make_cylinder_mesh(int segments) {
+    TriMesh m;
+    for (int i = 0; i < segments; ++i) {
+        double phi = 2.0 * 3.14159265358979323846 * i / segments;
+        float x = float(std::cos(phi)), y = float(std::sin(phi));
+        for (float z : {0.0f, 1.0f}) {
+            m.p.push_back(Vec3(x, y, z));
+            m.n.push_back(Vec3(x, y, 0));  // the exact radial normal: shading is the true cylinder's
+        }
+    }
+    for (int i = 0; i < segments; ++i) {
+        uint32_t a = uint32_t(2 * i), b = uint32_t(2 * ((i + 1) % segments));
+        // (x, y, 0) -> next phi -> top: counter-clockwise seen from outside, normal outwards
+        m.idx.insert(m.idx.end(), {a, b, b + 1, a, b + 1, a + 1});
     }
     return m;
 }

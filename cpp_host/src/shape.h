@@ -34,6 +34,16 @@ struct SurfaceHit {
                // tangent s, along which alpha_u runs, is this made orthogonal to ns (Frame::shading)
     const Shape* shape = nullptr;
     uint32_t prim = 0;
+    const TriMesh* mesh = nullptr;  // the hit mesh (MeshShape), for mesh_attribute textures
+    Vec2 bary;                      // Embree's barycentrics (u, v) on a mesh triangle
+    /// Where the BSDF's textures are looked up.
+    TexturePoint texture_point() const {
+        TexturePoint t(uv);
+        t.mesh = mesh;
+        t.prim = prim;
+        t.bary = bary;
+        return t;
+    }
 };
 
 class Shape {
@@ -148,6 +158,9 @@ private:
 TriMesh make_cube_mesh();       // [-1,1]^3, outward normals, per-face vertices, Mitsuba's uv
 TriMesh make_rectangle_mesh();  // [-1,1]^2 at z = 0, normal +z
 TriMesh make_disk_mesh(int segments = 256);  // unit disk at z = 0, normal +z
+/// Mitsuba's cylinder: radius 1 around z, z in [0, 1], open ends, normals outwards; `segments`
+/// facets (1024: the surface is within 5e-6 radii of the true cylinder, normals are exact).
+TriMesh make_cylinder_mesh(int segments = 1024);
 TriMesh make_sphere_mesh(int rings, int segments);  // unit sphere tessellation (tests)
 
 }  // namespace mf

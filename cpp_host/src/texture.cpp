@@ -1,6 +1,8 @@
 // mfhost — textures (see texture.h).
 #include "texture.h"
 
+#include "mesh_io.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -11,7 +13,7 @@ namespace {
 class ConstantTexture final : public Texture {
 public:
     explicit ConstantTexture(const Rgb& v) : v_(v) {}
-    Rgb eval(const Vec2&) const override { return v_; }
+    Rgb eval(const TexturePoint&) const override { return v_; }
     ValueRange range() const override {
         float v[3] = {v_.r, v_.g, v_.b};
         return ValueRange::of(v, 3);
@@ -27,15 +29,15 @@ class CheckerboardTexture final : public Texture {
 public:
     CheckerboardTexture(std::shared_ptr<Texture> c0, std::shared_ptr<Texture> c1, const UvTransform& t)
         : c0_(std::move(c0)), c1_(std::move(c1)), t_(t) {}
-    Rgb eval(const Vec2& uv_in) const override {
-        Vec2 uv = t_.apply(uv_in);
+    Rgb eval(const TexturePoint& uv_in) const override {
+        Vec2 uv = t_.apply(uv_in.uv);
         float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
         return ((u > 0.5f) == (v > 0.5f)) ? c0_->eval(uv_in) : c1_->eval(uv_in);
     }
     // Mitsuba 3.9.1's checkerboard eval_1 picks the colours the other way round from its eval
     // (measured with its mask plugin): reproduced, so that a mask's holes fall where Mitsuba's do
-    float eval_1(const Vec2& uv_in) const override {
-        Vec2 uv = t_.apply(uv_in);
+    float eval_1(const TexturePoint& uv_in) const override {
+        Vec2 uv = t_.apply(uv_in.uv);
         float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
         return ((u > 0.5f) != (v > 0.5f)) ? c0_->eval_1(uv_in) : c1_->eval_1(uv_in);
     }
@@ -67,8 +69,8 @@ public:
     }
     float mean() const override { return mean_; }
     std::pair<int, int> resolution() const override { return {w_, h_}; }
-    Rgb eval(const Vec2& uv_in) const override {
-        Vec2 uv = t_.apply(uv_in);
+    Rgb eval(const TexturePoint& uv_in) const override {
+        Vec2 uv = t_.apply(uv_in.uv);
         float x = uv.x * float(w_), y = uv.y * float(h_);
         if (filter_ == BitmapFilter::Nearest) return texel(int(std::floor(x)), int(std::floor(y)));
         // bilinear between texel centres (integer + 0.5)
@@ -116,6 +118,42 @@ private:
 };
 
 }  // namespace
+
+namespace {
+
+class MeshAttributeTexture final : public Texture {
+public:
+    MeshAttributeTexture(std::string name, float scale) : name_(std::move(name)), scale_(scale) {}
+    Rgb eval(const TexturePoint& at) const override {
+        const TriMesh::Attribute* a = at.mesh ? at.mesh->attribute(name_) : nullptr;
+        if (!a) return Rgb(0.0f);
+        if (a->per_face) return a->values[at.prim] * scale_;
+        const uint32_t* tri = &at.mesh->idx[3 * size_t(at.prim)];
+        return (a->values[tri[0]] * (1.0f - at.bary.x - at.bary.y) + a->values[tri[1]] * at.bary.x +
+                a->values[tri[2]] * at.bary.y) * scale_;
+    }
+    // The values depend on the meshes the texture is used on: unbounded for range queries.
+    ValueRange range() const override {
+        ValueRange r;
+        r.channels = 3;
+        for (int c = 0; c < 3; ++c) {
+            r.lo[c] = -kInf;
+            r.hi[c] = kInf;
+        }
+        return r;
+    }
+    float mean() const override { return 0.5f; }
+
+private:
+    std::string name_;
+    float scale_;
+};
+
+}  // namespace
+
+std::shared_ptr<Texture> make_mesh_attribute_texture(std::string name, float scale) {
+    return std::make_shared<MeshAttributeTexture>(std::move(name), scale);
+}
 
 std::shared_ptr<Texture> make_constant_texture(const Rgb& v) { return std::make_shared<ConstantTexture>(v); }
 std::shared_ptr<Texture> make_checkerboard_texture(std::shared_ptr<Texture> c0, std::shared_ptr<Texture> c1,

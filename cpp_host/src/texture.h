@@ -16,13 +16,25 @@
 
 namespace mf {
 
+struct TriMesh;
+
+/// Where a texture is looked up: Mitsuba's uv (SurfaceHit::uv) and, on a mesh, the hit triangle
+/// and its barycentrics (for mesh_attribute textures). Implicit from a uv (tests, emitters).
+struct TexturePoint {
+    Vec2 uv;
+    const TriMesh* mesh = nullptr;  // the hit mesh, or null (no mesh attributes)
+    uint32_t prim = 0;              // its triangle
+    Vec2 bary;                      // weights of the triangle's 2nd and 3rd vertex (Embree's u, v)
+    TexturePoint(const Vec2& uv_) : uv(uv_) {}
+};
+
 class Texture {
 public:
     virtual ~Texture() = default;
-    virtual Rgb eval(const Vec2& uv) const = 0;
+    virtual Rgb eval(const TexturePoint& uv) const = 0;
     /// Mitsuba's Texture::eval_1, the scalar that monochromatic users (mask opacity) read: the
     /// luminance of eval(), except where Mitsuba's own eval_1 differs (checkerboard).
-    virtual float eval_1(const Vec2& uv) const { return eval(uv).luminance(); }
+    virtual float eval_1(const TexturePoint& uv) const { return eval(uv).luminance(); }
     /// Mitsuba's Texture::resolution: a bitmap's width and height, 1 x 1 otherwise (a projector
     /// takes its image's aspect from it).
     virtual std::pair<int, int> resolution() const { return {1, 1}; }
@@ -56,6 +68,11 @@ struct UvTransform {
 };
 
 std::shared_ptr<Texture> make_constant_texture(const Rgb& value);
+/// Mitsuba's mesh_attribute: the named attribute (TriMesh::attributes, e.g. "vertex_color",
+/// interpolated with the barycentrics; "face_color", per triangle) of the mesh that is hit,
+/// times `scale`. Zero where the point has no such attribute (the scene builder refuses
+/// shapes without it).
+std::shared_ptr<Texture> make_mesh_attribute_texture(std::string name, float scale);
 /// Mitsuba's checkerboard: color0 where frac(u) and frac(v) are on the same side of 1/2.
 std::shared_ptr<Texture> make_checkerboard_texture(std::shared_ptr<Texture> color0, std::shared_ptr<Texture> color1,
                                                    const UvTransform& to_uv);

@@ -556,6 +556,13 @@ private:
             p.v = parse_xyz(ctx, n, 0.0);
             return p;
         }
+        if (k == "spectrum" && has_attr(n, "type")) {
+            check_attrs(ctx, n, {"name", "type"});
+            p.name = name_attr(ctx, n, true);
+            parse_srgb_spectrum(ctx, n, "<spectrum name=" + quote(p.name) + " type=" + quote(attr(ctx, n, "type")) + ">",
+                                unbounded_rgb, &p);
+            return p;
+        }
         if (k == "spectrum") {
             check_attrs(ctx, n, {"name", "value", "filename"});
         } else {
@@ -597,6 +604,27 @@ private:
             check_bounded(p, where, unbounded_rgb);
         }
         return p;
+    }
+
+    /// <spectrum type="srgb"><rgb name="color" value="..."/></spectrum>: Mitsuba's srgb spectrum
+    /// plugin, which its RGB variants keep as the colour itself (bounded like an <rgb>).
+    void parse_srgb_spectrum(const FileCtx& ctx, const pugi::xml_node& n, const std::string& where, bool unbounded_rgb,
+                             Property* p) {
+        if (attr(ctx, n, "type") != "srgb")
+            throw Error(p->loc, where + ": unsupported spectrum plugin (supported: srgb; or a <spectrum value=...> "
+                                        "constant, wavelength list or file)");
+        p->type = PropType::Rgb;
+        bool have_color = false;
+        for (const pugi::xml_node& c : n.children()) {
+            if (c.type() != pugi::node_element) continue;
+            if (std::string(c.name()) != "rgb" || std::string(c.attribute("name").value()) != "color" || have_color)
+                throw Error(loc(ctx, c), where + ": expects exactly one <rgb name=\"color\" value=...>");
+            Property color = parse_property(ctx, c, "emitter");  // bounds are checked below, under the spectrum's name
+            p->rgb = color.rgb;
+            have_color = true;
+        }
+        if (!have_color) throw Error(p->loc, where + ": needs <rgb name=\"color\" value=...>");
+        check_bounded(*p, where, unbounded_rgb);
     }
 
     /// <spectrum value="v"> (a constant), value="wl:v, wl:v, ..." or filename="x.spd", converted to

@@ -357,4 +357,113 @@ TEST_CASE(spectra_as_mitsuba_rgb_variants) {
     }
 }
 
+TEST_CASE(cylinder_instance_and_srgb_spectrum) {
+    // Reference hits: Mitsuba 3.9.1 scalar_rgb, cylinder with to_world = scale(1.5, 1.5, 2),
+    // ray_intersect from the listed origins. Tolerances: the tessellation (1024 facets) moves the
+    // surface by < 5e-6 radii; uv and dp/du come from the analytic parameterization (float).
+    auto sc = build(R"(<shape type="cylinder"><transform name="to_world"><scale x="1.5" y="1.5" z="2"/></transform></shape>)");
+    struct Ref { Vec3 o, d, p, n; Vec2 uv; Vec3 dpdu; };
+    const Ref refs[3] = {
+        {Vec3(5, 0.5f, 1), Vec3(-1, 0, 0), Vec3(1.41421f, 0.5f, 1), Vec3(0.942809f, 0.333333f, 0), Vec2(0.0540867f, 0.5f), Vec3(-3.14159f, 8.88577f, 0)},
+        {Vec3(0, -5, 0.3f), Vec3(0, 1, 0), Vec3(0, -1.5f, 0.3f), Vec3(0, -1, 0), Vec2(0.75f, 0.15f), Vec3(9.42478f, 0, 0)},
+        // from inside: Mitsuba's normal still points outwards
+        {Vec3(0, 0, 0.5f), normalize(Vec3(1, 1, 0)), Vec3(1.06066f, 1.06066f, 0.5f), Vec3(0.707107f, 0.707107f, 0), Vec2(0.125f, 0.25f), Vec3(-6.66432f, 6.66432f, 0)}};
+    for (const Ref& r : refs) {
+        SurfaceHit h;
+        CHECK(sc->intersect(Ray(r.o, r.d), &h));
+        for (int k = 0; k < 3; ++k) {
+            CHECK_NEAR(h.p[k], r.p[k], 2e-5);
+            CHECK_NEAR(h.ns[k], r.n[k], 1e-5);
+            CHECK_NEAR(h.ng[k], r.n[k], 5e-3);  // a facet's normal: within pi / 1024 of the true one
+            CHECK_NEAR(h.dpdu[k], r.dpdu[k], 1e-4);
+        }
+        CHECK_NEAR(h.uv.x, r.uv.x, 1e-5);
+        CHECK_NEAR(h.uv.y, r.uv.y, 1e-5);
+    }
+    // open ends: a ray along the axis misses
+    SurfaceHit miss;
+    CHECK(!sc->intersect(Ray(Vec3(0, 0, -5), Vec3(0, 0, 1)), &miss));
+    // p0, p1, radius: the axis from p0 to p1
+    auto axis = build(R"(<shape type="cylinder"><point name="p0" x="1" y="0" z="0"/><point name="p1" x="3" y="0" z="0"/>
+        <float name="radius" value="0.5"/></shape>)");
+    SurfaceHit ha;
+    CHECK(axis->intersect(Ray(Vec3(2.5f, 0, 5), Vec3(0, 0, -1)), &ha));
+    CHECK_NEAR(ha.p.z, 0.5, 1e-5);
+    CHECK_NEAR(ha.uv.y, 0.75, 1e-5);  // v = distance along the axis / |p1 - p0|
+    CHECK(!axis->intersect(Ray(Vec3(3.5f, 0, 5), Vec3(0, 0, -1)), &miss));
+    CHECK_THROWS_WITH(build(R"(<shape type="cylinder"><point name="p1" x="0" y="0" z="0"/></shape>)"), "distinct");
+
+    // instances: every member of the group per instance, placed by instance * member to_world
+    auto inst = build(R"(<shape type="shapegroup" id="g">
+          <shape type="sphere"><float name="radius" value="0.5"/><transform name="to_world"><translate x="1"/></transform></shape>
+          <shape type="rectangle"/></shape>
+        <shape type="instance"><ref id="g"/></shape>
+        <shape type="instance"><ref id="g"/><transform name="to_world"><scale value="2"/><translate z="10"/></transform></shape>)");
+    CHECK(inst->shapes().size() == 4);
+    SurfaceHit hi;
+    CHECK(inst->intersect(Ray(Vec3(2, 0, 20), Vec3(0, 0, -1)), &hi));  // sphere at (2, 0, 10), radius 1
+    CHECK_NEAR(hi.p.z, 11, 1e-5);
+    CHECK(inst->intersect(Ray(Vec3(-1.9f, 0, 20), Vec3(0, 0, -1)), &hi));  // rectangle scaled to [-2, 2]^2 at z = 10
+    CHECK_NEAR(hi.p.z, 10, 1e-5);
+    CHECK(inst->intersect(Ray(Vec3(-0.9f, 0, 5), Vec3(0, 0, -1)), &hi));  // the untransformed instance
+    CHECK_NEAR(hi.p.z, 0, 1e-6);
+    auto only_group = build(R"(<shape type="shapegroup" id="g"><shape type="sphere"/></shape>)");
+    CHECK(only_group->shapes().empty());  // a shapegroup alone renders nothing (as in Mitsuba)
+    CHECK_THROWS_WITH(build(R"(<shape type="shapegroup" id="g"><shape type="sphere"><emitter type="area"/></shape></shape>
+        <shape type="instance"><ref id="g"/></shape>)"), "cannot be instanced");
+    CHECK_THROWS_WITH(build(R"(<shape type="shapegroup" id="g"><shape type="sphere"/></shape>
+        <shape type="shapegroup" id="h"><shape type="instance"><ref id="g"/></shape></shape><shape type="instance"><ref id="h"/></shape>)"),
+                      "nested instancing");
+    CHECK_THROWS_WITH(build(R"(<bsdf type="diffuse" id="b"/><shape type="instance"><ref id="b"/></shape>)"), "shapegroup");
+
+    // <spectrum type="srgb">: the colour itself, bounded like an <rgb> (Mitsuba 3.9.1 refuses
+    // color 1.5 in a reflectance: "Invalid RGB reflectance value")
+    ParsedScene srgb = parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" type="srgb"><rgb name="color" value="0.5, 0.25, 1"/></spectrum></bsdf>)");
+    Rgb c = srgb.root->children[0].obj->props[0].rgb;
+    CHECK(c.r == 0.5f && c.g == 0.25f && c.b == 1.0f);
+    CHECK_THROWS_WITH(parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" type="srgb"><rgb name="color" value="1.5, 0.2, 0.2"/></spectrum></bsdf>)"),
+                      "outside [0, 1]");
+    parse(R"(<emitter type="constant"><spectrum name="radiance" type="srgb"><rgb name="color" value="3, 2, 1"/></spectrum></emitter>)");
+    CHECK_THROWS_WITH(parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" type="blackbody"/></bsdf>)"), "unsupported spectrum plugin");
+    CHECK_THROWS_WITH(parse(R"(<bsdf type="diffuse"><spectrum name="reflectance" type="srgb"/></bsdf>)"), "needs <rgb name=\"color\"");
+}
+
+TEST_CASE(mesh_attribute_textures) {
+    // Reference values: Mitsuba 3.9.1 scalar_rgb, mesh_attribute eval at ray_intersect of the same
+    // PLY (vertex colours interpolated with Embree's barycentrics, uchar values as stored, face
+    // colours per face). Tolerance 1e-4 relative: float arithmetic.
+    const std::string path = std::string(MFHOST_TEST_WORK) + "/attr.ply";
+    {
+        FILE* f = std::fopen(path.c_str(), "w");
+        std::fputs("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                   "property uchar r\nproperty uchar g\nproperty uchar b\nelement face 2\n"
+                   "property list uchar int vertex_indices\nproperty float r\nproperty float g\nproperty float b\nend_header\n"
+                   "-1 -1 0 255 0 0\n1 -1 0 0 128 0\n1 1 0 0 0 64\n-1 1 0 10 20 30\n"
+                   "3 0 1 2 0.9 0.5 0.1\n3 0 2 3 0.2 0.3 0.4\n", f);
+        std::fclose(f);
+    }
+    auto reflectance = [&](const std::string& name, const Vec3& o) {
+        auto sc = build("<shape type=\"ply\"><string name=\"filename\" value=\"" + path +
+                        "\"/><bsdf type=\"diffuse\"><texture name=\"reflectance\" type=\"mesh_attribute\"><string name=\"name\" value=\"" +
+                        name + "\"/></texture></bsdf></shape>");
+        SurfaceHit h;
+        CHECK(sc->intersect(Ray(o, Vec3(0, 0, -1)), &h));
+        return h.shape->bsdf->eval(h.texture_point(), Vec3(0, 0, 1), Vec3(0, 0, 1)) * kPi;
+    };
+    Rgb v = reflectance("vertex_color", Vec3(0.9f, -0.9f, 1));
+    CHECK_NEAR(v.r, 12.75, 2e-3);
+    CHECK_NEAR(v.g, 115.2, 2e-2);
+    CHECK_NEAR(v.b, 3.2, 1e-3);
+    Rgb fc = reflectance("face_color", Vec3(0.9f, -0.9f, 1));
+    CHECK_NEAR(fc.r, 0.9, 1e-5);
+    CHECK_NEAR(fc.b, 0.1, 1e-5);
+    Rgb fc2 = reflectance("face_color", Vec3(-0.5f, 0.5f, 1));
+    CHECK_NEAR(fc2.g, 0.3, 1e-5);
+    // a shape without the attribute, or another attribute name, is refused with the element
+    CHECK_THROWS_WITH(build(R"(<shape type="sphere"><bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute">
+        <string name="name" value="vertex_color"/></texture></bsdf></shape>)"), "has no mesh attribute");
+    CHECK_THROWS_WITH(build(R"(<texture type="mesh_attribute" id="t"><string name="name" value="vertex_weight"/></texture>)"),
+                      "vertex_color or face_color");
+}
+
 TEST_MAIN()

@@ -300,10 +300,10 @@ public:
         : texture_(std::move(texture)), range_(texture_range(*texture_)), constant_(!texture_->is_spatially_varying()) {
         value_ = ::mf::Rgb(range_.lo[0], range_.lo[1], range_.lo[2]);
     }
-    ::mf::Rgb eval(const ::mf::Vec2& uv) const override {
+    ::mf::Rgb eval(const ::mf::TexturePoint& at) const override {
         MI_IMPORT_TYPES()
         SurfaceInteraction3f si = dr::zeros<SurfaceInteraction3f>();
-        si.uv = Point2f(uv.x, uv.y);
+        si.uv = Point2f(at.uv.x, at.uv.y);
         const auto c = texture_->eval(si);
         return ::mf::Rgb(c[0], c[1], c[2]);
     }

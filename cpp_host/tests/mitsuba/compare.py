@@ -33,6 +33,8 @@ def main():
     # data files the scenes refer to
     subprocess.run([sys.executable, os.path.join(HERE, 'make_serialized.py'), os.path.join(a.work, 'torus.serialized')], check=True)
     subprocess.run([sys.executable, os.path.join(HERE, 'make_blob_vol.py'), a.work], check=True)
+    subprocess.run([sys.executable, os.path.join(HERE, 'make_normal_png.py'), a.work], check=True)
+    subprocess.run([sys.executable, os.path.join(HERE, 'make_attribute_ply.py'), a.work], check=True)
     scenes = a.scenes or sorted(glob.glob(os.path.join(HERE, '*.xml')))
     passed = failed = 0
     for scene in scenes:

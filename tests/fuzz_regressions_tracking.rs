@@ -1,0 +1,90 @@
+//! Regression tests for what the `tracking`, `fields` and `ndf` fuzz targets found (issue 9,
+//! `fuzz/fuzz_targets/`): each one the exact case of a crash artifact, reduced.
+
+use macrofacet::ffi::*;
+use std::ptr;
+
+/// The regular tetrahedron with vertices `(±s, ±s, ±s)` (an even number of minus signs).
+fn tetrahedron(s: f64) -> (Vec<f64>, Vec<u32>) {
+    let positions = vec![s, s, s, s, -s, -s, -s, s, -s, -s, -s, s];
+    let indices = vec![0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2];
+    (positions, indices)
+}
+
+/// `fuzz/artifacts/tracking/crash-21498556eb8466047680f6176e4131c1c7fd8ce1` (a tetrahedron of
+/// half-width 1e300), and the sweep of half-widths around it. Two failures:
+/// - from 1e103 on, `mf_surface_new_mesh` panics (index 4294967295 out of bounds in
+///   `src/surface/mesh/grid.rs` `CellGrid::build`: the cell size is the `cbrt` of the extents'
+///   product, which overflows to inf, so block centres are NaN, the hierarchy finds no triangle
+///   and its `u32::MAX` sentinel seeds the next search): MF_ERROR_INTERNAL;
+/// - from 1e77 to 1e102 the mesh is accepted but `mf_surface_eval` at its centre answers
+///   `f = +s` with normal (-1, 0, 0) instead of `-s/√3` (a product of squared lengths, ~s⁴,
+///   overflows in the inside/outside decision): a wrong number with MF_OK.
+/// A mesh whose size the library cannot handle must be refused with MF_ERROR_INVALID_ARGUMENT
+/// and a reason; one it accepts must answer right.
+#[test]
+fn huge_mesh_is_refused_or_answers_right() {
+    for s in [1.0, 1e50, 1e76, 1e77, 1e100, 1e102, 1e103, 1e150, 1e300] {
+        let (positions, indices) = tetrahedron(s);
+        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
+        let mut surface = ptr::null_mut();
+        let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+        assert!(status == mf_status::MF_OK || status == mf_status::MF_ERROR_INVALID_ARGUMENT, "half-width {s:e}: {status:?}");
+        if status == mf_status::MF_OK {
+            let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+            let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), zero, &mut point) };
+            assert_eq!(status, mf_status::MF_OK, "half-width {s:e}");
+            let expected = -s / 3f64.sqrt();
+            assert!((point.f - expected).abs() <= 1e-9 * s, "half-width {s:e}: f at the centre {} (expected {expected})", point.f);
+            unsafe { mf_surface_free(surface) };
+        }
+    }
+}
+
+/// A host surface that answers `f = NaN` (a unit normal) everywhere.
+unsafe extern "C" fn nan_point(_: *mut std::ffi::c_void, _: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let z = mf_vec3 { x: 0.0, y: 0.0, z: 1.0 };
+    unsafe { *out = mf_surface_point { f: f64::NAN, normal: z, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// A host sphere of radius 1 whose normal has length 2.
+unsafe extern "C" fn long_normal_point(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let n = mf_vec3 { x: 2.0 * p.x / r, y: 2.0 * p.y / r, z: 2.0 * p.z / r };
+    unsafe { *out = mf_surface_point { f: r - 1.0, normal: n, tangent: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/tracking/crash-19d453b9d3bbb4d3eafba5a26721a5d25b4fcb0a`: a callback
+/// surface's answer that the tracking calls refuse (NaN `f`, a normal of length 2: "the mean
+/// surface at p returned ...: f must not be NaN, the normal must be unit") is passed on by
+/// `mf_surface_eval` with MF_OK (`src/ffi/surface.rs`: `EvalPoint` returns `surface.point(p)`
+/// unchecked; the check lives in `Tracker::checked`), and `mf_surface_enclosure` builds from it.
+/// NaN is never a valid MF_OK output: both must fail with MF_ERROR_INVALID_ARGUMENT and write
+/// nothing, as the tracking calls do.
+#[test]
+fn surface_eval_and_enclosure_refuse_what_tracking_refuses() {
+    for (name, point) in [("NaN f", nan_point as unsafe extern "C" fn(_, _, _) -> _), ("normal of length 2", long_normal_point)] {
+        let callbacks = mf_surface_callbacks {
+            point: Some(point),
+            bound: None,
+            shape: MF_SURFACE_GENERAL,
+            bounds_min: mf_vec3 { x: -1.0, y: -1.0, z: -1.0 },
+            bounds_max: mf_vec3 { x: 1.0, y: 1.0, z: 1.0 },
+        };
+        let mut surface = ptr::null_mut();
+        assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+        let sentinel = mf_vec3 { x: -7.0, y: -7.0, z: -7.0 };
+        let mut out = mf_surface_point { f: -7.0, normal: sentinel, tangent: sentinel, u: -7.0, v: -7.0 };
+        let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: 0.5, y: 0.25, z: 2.0 }, &mut out) };
+        assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT, "{name}: mf_surface_eval gave {out:?}");
+        assert_eq!(out.f, -7.0, "{name}: written on failure");
+        let mut enclosure = ptr::null_mut();
+        let status = unsafe { mf_surface_enclosure(surface, ptr::null_mut(), 0.1, 0.25, &mut enclosure) };
+        assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT, "{name}: mf_surface_enclosure");
+        assert!(enclosure.is_null());
+        unsafe { mf_surface_free(surface) };
+    }
+}

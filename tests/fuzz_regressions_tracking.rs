@@ -88,3 +88,88 @@ fn surface_eval_and_enclosure_refuse_what_tracking_refuses() {
         unsafe { mf_surface_free(surface) };
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-317795d42a035b8f72fed485d81f5c018b38d567`: a mesh of two
+/// zero-area triangles (all three vertices at the origin) is accepted by `mf_surface_new_mesh`,
+/// and `mf_surface_eval` then answers MF_OK with the normal (0, 0, 0), which no frame takes
+/// (the tracking calls refuse it mid-walk); at the vertex itself (0, 0, 0), and on the segment of
+/// collinear vertices at (0.5, 0, 0). A mesh without area
+/// must be refused when it is created, with the reason (or answer unit normals).
+#[test]
+fn mesh_without_area_is_refused_or_has_unit_normals() {
+    let cases: [(&str, Vec<f64>); 2] = [("coincident", vec![0.0; 9]), ("collinear", vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0])];
+    for (name, positions) in cases {
+        let indices: Vec<u32> = vec![0, 1, 2, 0, 2, 1];
+        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 3, indices: indices.as_ptr(), triangle_count: 2, normals: ptr::null(), uvs: ptr::null() };
+        let mut surface = ptr::null_mut();
+        let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+        if status == mf_status::MF_ERROR_INVALID_ARGUMENT {
+            continue;
+        }
+        assert_eq!(status, mf_status::MF_OK, "{name}");
+        for p in [mf_vec3 { x: 0.3, y: 0.2, z: 0.1 }, mf_vec3 { x: -1.0, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.5, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }] {
+            let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+            let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };
+            let n = point.normal;
+            let len = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+            assert!(status != mf_status::MF_OK || (len - 1.0).abs() <= 1e-6 && !point.f.is_nan(), "{name} at {p:?}: {point:?}");
+        }
+        unsafe { mf_surface_free(surface) };
+    }
+}
+
+/// `fuzz/artifacts/tracking/crash-f608ee00e91797708ef8fd1375c9fa83fb734e0d`: far from a
+/// surface, where `|p − closest|²` overflows (|p| ~ 1e304; the tetrahedron of that artifact had
+/// half-width 5.4e51), `mf_surface_eval` answers MF_OK with the normal (0, 0, 0) (`f = +inf` is
+/// the overflow issue 9 accepts; a zero normal is no frame). Checked for a mesh and a sphere:
+/// MF_OK must come with a unit normal (or the point be refused as out of range).
+#[test]
+fn far_point_has_a_unit_normal() {
+    let (positions, indices) = tetrahedron(1.0);
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
+    let (mut mesh_surface, mut sphere_surface) = (ptr::null_mut(), ptr::null_mut());
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    unsafe {
+        assert_eq!(mf_surface_new_mesh(&mesh, &mut mesh_surface), mf_status::MF_OK);
+        assert_eq!(mf_surface_new_sphere(zero, 1.0, false, mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, &mut sphere_surface), mf_status::MF_OK);
+    }
+    for (name, surface) in [("mesh", mesh_surface), ("sphere", sphere_surface)] {
+        for p in [mf_vec3 { x: 1.0650001015113206e304, y: 1e-320, z: 0.0 }, mf_vec3 { x: 1e200, y: 1e200, z: 0.0 }] {
+            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+            let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };
+            let n = point.normal;
+            let len = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+            assert!(status != mf_status::MF_OK || (len - 1.0).abs() <= 1e-6 && !point.f.is_nan(), "{name} at {p:?}: {point:?}");
+        }
+    }
+    unsafe {
+        mf_surface_free(mesh_surface);
+        mf_surface_free(sphere_surface);
+    }
+}
+
+/// `fuzz/artifacts/tracking/crash-e78f2d4e087aab1dfd4f9cef01c5806e0903acef`: a tetrahedron
+/// (half-width 5.6e50) with finite texture coordinates, one of them `v = -1e308`, is accepted,
+/// and `mf_surface_eval` at its centre answers MF_OK with the tangent (inf, -inf, NaN): `dp/du`
+/// overflows. (The tracking calls refuse such a point mid-walk.) The mesh must be refused, or
+/// the tangent be finite (any fallback a zero-area uv triangle gets).
+#[test]
+fn mesh_uvs_never_give_a_non_finite_tangent() {
+    let s = 5.645309114862115e50;
+    let (positions, indices) = tetrahedron(s);
+    let uvs = [0.9999999999991047, -9.999999999997382e307, 0.035162057122917534, 0.5, 1.3233858453531866e-13, 0.0, 0.0, 0.0];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: uvs.as_ptr() };
+    let mut surface = ptr::null_mut();
+    let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+    if status == mf_status::MF_ERROR_INVALID_ARGUMENT {
+        return;
+    }
+    assert_eq!(status, mf_status::MF_OK);
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+    let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), zero, &mut point) };
+    let t = point.tangent;
+    assert!(status != mf_status::MF_OK || [t.x, t.y, t.z, point.u, point.v].iter().all(|x| x.is_finite()), "{point:?}");
+    unsafe { mf_surface_free(surface) };
+}

@@ -324,3 +324,17 @@ pub fn ndf(params: &[Param]) -> Option<Ndf> {
     let handle = params_handle(params);
     check::call(|out| unsafe { mf_ndf_new(handle.0, out) }).ok().map(Ndf)
 }
+
+/// The largest roughness a parameter set gives (`alpha*`, or `√2 σ / lengthscale*`, seeds/000
+/// Eq. 4), NaN when it gives none.
+pub fn largest_alpha(params: &[Param]) -> f64 {
+    let sigma = sigma(params).unwrap_or(f64::NAN);
+    params
+        .iter()
+        .filter_map(|p| match (std::str::from_utf8(&p.name), &p.value) {
+            (Ok(name), Value::Float(x)) if name.starts_with("alpha") => Some(*x),
+            (Ok(name), Value::Float(l)) if name.starts_with("lengthscale") => Some(std::f64::consts::SQRT_2 * sigma / l),
+            _ => None,
+        })
+        .fold(f64::NAN, f64::max)
+}

@@ -43,8 +43,8 @@ fuzz_target!(|data: &[u8]| {
     }
     let Ok(field) = check::call(|o| unsafe { mf_field_new_callbacks(&callbacks, o) }) else { return };
     let field = Field(field);
-    let Some((surface, surface_host)) = surface::surface(&mut b, size, DVec3::ZERO) else { return };
-    let mut scene = Scene { medium: &medium, surface: &surface, field: Some(&field), host: Host { surface: surface_host, field: Some(field_host) }, center: DVec3::ZERO, size };
+    let Some(built) = surface::surface(&mut b, size, DVec3::ZERO) else { return };
+    let mut scene = Scene { medium: &medium, surface: &built.surface, field: Some(&field), host: Host { surface: built.host, field: Some(field_host), surface_exact: built.exact }, center: DVec3::ZERO, size };
     let mut queries = Vec::new();
     for _ in 0..1 + b.below(2) {
         let q = scene.query(&mut b);

@@ -29,8 +29,8 @@ fuzz_target!(|data: &[u8]| {
     // The surface's size: mostly a few to 1e4 shell heights, sometimes unrelated to the shell.
     let size = if b.u8() % 8 == 0 { b.positive(-3.0, 3.0) } else { top * b.log_uniform(-1.0, 4.0) };
     let center = if b.u8() % 4 == 0 { b.sphere() * size * b.log_uniform(-2.0, 2.0) } else { DVec3::ZERO };
-    let Some((surface, surface_host)) = surface::surface(&mut b, size, center) else { return };
-    let mut scene = Scene { medium: &medium, surface: &surface, field: None, host: Host { surface: surface_host, field: None }, center, size };
+    let Some(built) = surface::surface(&mut b, size, center) else { return };
+    let mut scene = Scene { medium: &medium, surface: &built.surface, field: None, host: Host { surface: built.host, field: None, surface_exact: built.exact }, center, size };
     scene.bounding_box();
     let mut queries = Vec::new();
     for _ in 0..1 + b.below(2) {

@@ -177,7 +177,7 @@ pub fn gpis_hit(h: &mf_gpis_hit, origin: mf_vec3, d: mf_vec3, t_max: f64) {
 }
 
 /// A tracked free flight of `q` (`mf_track_free_flight`): a collision at a finite
-/// `0 <= t <= t_max` at `p = origin + t d` with a finite `f` and a frame the phase calls take
+/// `0 <= t <= t_max` at `p = origin + t d` with `f` not NaN and a frame the phase calls take
 /// (unit normal, finite tangent); or a pass with `t = t_max` and the rest zero.
 pub fn collision(c: &mf_collision, q: &mf_track_query) {
     if !c.scattered {
@@ -190,7 +190,8 @@ pub fn collision(c: &mf_collision, q: &mf_track_query) {
     }
     assert!(c.t >= 0.0 && c.t <= q.t_max && c.t.is_finite(), "collision at t = {} on [0, {}]", c.t, q.t_max);
     let (o, d, p) = (dvec3(q.origin), dvec3(q.d).normalize(), dvec3(c.p));
-    assert!(p.is_finite() && c.f.is_finite(), "collision point {p}, f = {}", c.f);
+    // (f as the surface answered it: a host may answer ±inf, which the tracker takes.)
+    assert!(p.is_finite() && !c.f.is_nan(), "collision point {p}, f = {}", c.f);
     let on_ray = o + c.t * d;
     assert!((p - on_ray).length() <= 1e-12 * (o.length() + c.t).max(f64::MIN_POSITIVE), "collision point {p} is not o + t d = {on_ray}");
     unit("collision frame normal", c.frame.normal);

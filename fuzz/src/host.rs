@@ -292,6 +292,8 @@ impl FieldHost {
 pub struct Host {
     pub surface: Option<SurfaceHost>,
     pub field: Option<FieldHost>,
+    /// A built-in surface whose bounds must hold (`crate::surface::Built::exact`).
+    pub surface_exact: bool,
 }
 
 impl Host {
@@ -309,7 +311,7 @@ impl Host {
 
     /// Every answer of both hosts holds.
     pub fn honest(&self) -> bool {
-        self.surface.as_ref().is_none_or(|s| s.honest()) && self.field.as_ref().is_none_or(|f| f.honest())
+        self.surface_exact && self.surface.as_ref().is_none_or(|s| s.honest()) && self.field.as_ref().is_none_or(|f| f.honest())
     }
 
     /// Gives the same answers whenever asked (no lie that depends on the call count): batches

@@ -21,9 +21,19 @@ impl Drop for Surface {
     }
 }
 
-/// A surface of about `size` scene units around `center`, and the host behind it when it is a
-/// callback surface; `None` when the ABI refused it (the refusal itself is checked).
-pub fn surface(b: &mut Bytes, size: f64, center: DVec3) -> Option<(Surface, Option<SurfaceHost>)> {
+/// A surface from [`surface`].
+pub struct Built {
+    pub surface: Surface,
+    /// The host behind a callback surface.
+    pub host: Option<SurfaceHost>,
+    /// A built-in surface undamaged: a closed mesh or a grid of true distances, whose bounds
+    /// must hold (damaged ones are no signed distance, and the tracker may count violations).
+    pub exact: bool,
+}
+
+/// A surface of about `size` scene units around `center`; `None` when the ABI refused it (the
+/// refusal itself is checked).
+pub fn surface(b: &mut Bytes, size: f64, center: DVec3) -> Option<Built> {
     let debug = std::env::var_os("MF_FUZZ_DEBUG").is_some();
     match b.u8() % 4 {
         0 => {
@@ -39,10 +49,10 @@ pub fn surface(b: &mut Bytes, size: f64, center: DVec3) -> Option<(Surface, Opti
                 eprintln!("sphere: center {center} radius {radius:e} flip {flip} pole {pole}");
             }
             let s = check::call(|o| unsafe { mf_surface_new_sphere(vec3(center), radius, flip, vec3(pole), o) }).ok()?;
-            Some((Surface(s), None))
+            Some(Built { surface: Surface(s), host: None, exact: true })
         }
-        1 => mesh(b, size, center, debug).map(|s| (s, None)),
-        2 => grid(b, size, center, debug).map(|s| (s, None)),
+        1 => mesh(b, size, center, debug).map(|(surface, exact)| Built { surface, host: None, exact }),
+        2 => grid(b, size, center, debug).map(|(surface, exact)| Built { surface, host: None, exact }),
         _ => {
             let shape = if b.bool() {
                 Shape::Sphere { center, radius: size }
@@ -56,20 +66,22 @@ pub fn surface(b: &mut Bytes, size: f64, center: DVec3) -> Option<(Surface, Opti
                 eprintln!("callback surface: {host:?} {callbacks:?}");
             }
             let s = check::call(|o| unsafe { mf_surface_new_callbacks(&callbacks, o) }).ok()?;
-            Some((Surface(s), Some(host)))
+            Some(Built { surface: Surface(s), host: Some(host), exact: true })
         }
     }
 }
 
 /// A triangle mesh: a closed solid (tetrahedron, octahedron) scaled to `size`, or a degenerate
-/// one; vertex normals and uvs sometimes.
-fn mesh(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<Surface> {
+/// one (then not `exact`); vertex normals and uvs sometimes.
+fn mesh(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<(Surface, bool)> {
+    let kind = b.u8() % 8;
+    let mut exact = kind <= 4;
     const TETRAHEDRON: ([[f64; 3]; 4], [[u32; 3]; 4]) = ([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]], [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]);
     const OCTAHEDRON: ([[f64; 3]; 6], [[u32; 3]; 8]) = (
         [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]],
         [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]],
     );
-    let (mut positions, mut indices): (Vec<DVec3>, Vec<[u32; 3]>) = match b.u8() % 8 {
+    let (mut positions, mut indices): (Vec<DVec3>, Vec<[u32; 3]>) = match kind {
         0 | 1 | 2 => (TETRAHEDRON.0.iter().map(|p| DVec3::from(*p)).collect(), TETRAHEDRON.1.to_vec()),
         3 | 4 => (OCTAHEDRON.0.iter().map(|p| DVec3::from(*p)).collect(), OCTAHEDRON.1.to_vec()),
         // One open triangle, or all vertices equal, or collinear ones.
@@ -82,7 +94,9 @@ fn mesh(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<Surface>
     }
     // Damage: a moved vertex (sometimes non-finite), a duplicated or flipped triangle, a bad index.
     for _ in 0..b.below(3) {
-        match b.u8() % 6 {
+        let damage = b.u8() % 6;
+        exact &= damage == 4;
+        match damage {
             0 => {
                 let i = b.below(positions.len() - 1);
                 positions[i] = if b.bool() { DVec3::new(b.float(), b.float(), b.float()) } else { positions[(i + 1) % positions.len()] };
@@ -140,12 +154,12 @@ fn mesh(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<Surface>
     if debug {
         eprintln!("mesh: positions {positions:?} indices {indices:?} normals {normals:?} uvs {uvs:?} {mesh:?}");
     }
-    check::call(|o| unsafe { mf_surface_new_mesh(&mesh, o) }).ok().map(Surface)
+    check::call(|o| unsafe { mf_surface_new_mesh(&mesh, o) }).ok().map(|s| (Surface(s), exact))
 }
 
 /// A signed-distance grid of a sphere filling most of the unit cube, `n³` samples (n from 2),
 /// scaled to `size` and rotated; sometimes with damaged values or transform.
-fn grid(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<Surface> {
+fn grid(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<(Surface, bool)> {
     let n = [2 + b.below(5), 2 + b.below(5), 2 + b.below(5)];
     let radius = 0.05 + 0.4 * b.unit();
     let scale = 2.0 * size;
@@ -158,7 +172,8 @@ fn grid(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<Surface>
             }
         }
     }
-    for _ in 0..b.below(2) {
+    let damaged = b.below(2);
+    for _ in 0..damaged {
         let i = b.below(values.len() - 1);
         values[i] = b.choose(&[f32::NAN, f32::INFINITY, 0.0, -1.0, 1e30, f32::MIN_POSITIVE]);
     }
@@ -184,5 +199,5 @@ fn grid(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<Surface>
     if debug {
         eprintln!("grid: {n:?} values {values:?} {grid:?}");
     }
-    check::call(|o| unsafe { mf_surface_new_grid(&grid, o) }).ok().map(Surface)
+    check::call(|o| unsafe { mf_surface_new_grid(&grid, o) }).ok().map(|s| (Surface(s), damaged == 0))
 }

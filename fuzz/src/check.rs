@@ -200,13 +200,13 @@ pub fn collision(c: &mf_collision, q: &mf_track_query) {
 
 /// A visible-normal sample (`mf_ndf_sample_visible`): invalid ones are all zeros; valid ones
 /// have a unit `m` and `pdf > 0` equal to `pdf_at_m` (what `mf_ndf_pdf_visible` says at `m`)
-/// to the rounding of `m`'s trip through world space.
-pub fn ndf_sample(s: &mf_ndf_sample, pdf_at_m: f64) {
+/// to `rel` (the rounding of `m`'s trip through world space, which a grazing `wi` amplifies).
+pub fn ndf_sample(s: &mf_ndf_sample, pdf_at_m: f64, rel: f64) {
     if !s.valid {
         assert!([s.m.x, s.m.y, s.m.z, s.pdf].iter().all(|x| *x == 0.0), "an invalid sample must be all zeros: {s:?}");
         return;
     }
     unit("sample m", s.m);
     assert!(s.pdf > 0.0 && s.pdf.is_finite(), "valid sample with pdf {}", s.pdf);
-    assert!(close(s.pdf, pdf_at_m, 1e-6), "sample pdf {} but mf_ndf_pdf_visible {pdf_at_m}", s.pdf);
+    assert!(close(s.pdf, pdf_at_m, rel), "sample pdf {} but mf_ndf_pdf_visible {pdf_at_m}", s.pdf);
 }

@@ -85,3 +85,25 @@ fn gtr_lambda_near_the_normal_is_not_nan() {
     }
     unsafe { mf_ndf_free(n) };
 }
+
+/// `fuzz/artifacts/ndf/crash-45e43ad95b1c47e52c48f8e688b6b46fd9b19cb5`: GTR γ = 2.2902,
+/// α = 1.0003e-4, stretch 0.9843, frame normal (-3, 4.17e62, 1e6) (≈ +y), `wi = -y` (below the
+/// surface), u = (0.99216, 0.10436, 0.57256): `mf_ndf_sample_visible` returns a valid sample with
+/// pdf 5.97e18 where `mf_ndf_pdf_visible` says 0. A sample and the density of the same call must
+/// agree (or the sample be invalid when no facet is visible from `wi`).
+#[test]
+fn visible_normal_sample_from_below_agrees_with_pdf_visible() {
+    let n = ndf(&[("gamma", 2.290196078431898), ("alpha", 1.0003316255674524e-4), ("stretch", 9.84271522612481e-1)], &[("distribution", "gtr")]);
+    let normal = mf_vec3 { x: -3.0, y: 4.1720279211547985e62, z: 1000000.0 };
+    let frame = mf_frame { normal, tangent: normal };
+    let wi = mf_vec3 { x: -0.0, y: -1.0, z: -0.0 };
+    let u = [0.9921568626095811, 0.10436356675433756, 0.5725554223154105];
+    let mut s = mf_ndf_sample { m: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, pdf: -1.0, valid: false };
+    assert_eq!(unsafe { mf_ndf_sample_visible(n, &frame, wi, u.as_ptr(), &mut s) }, mf_status::MF_OK);
+    if s.valid {
+        let mut pdf = -1.0;
+        assert_eq!(unsafe { mf_ndf_pdf_visible(n, &frame, wi, s.m, &mut pdf) }, mf_status::MF_OK);
+        assert!((s.pdf - pdf).abs() <= 1e-9 * pdf, "{s:?}, mf_ndf_pdf_visible {pdf}");
+    }
+    unsafe { mf_ndf_free(n) };
+}

@@ -107,3 +107,23 @@ fn visible_normal_sample_from_below_agrees_with_pdf_visible() {
     }
     unsafe { mf_ndf_free(n) };
 }
+
+/// `fuzz/artifacts/ndf/crash-f54e813106abbca2dd61918a3604d1b587b18e1c`: Beckmann
+/// α = 1.2953245738982308e-4, frame normal (2, 2.761434871387058e154, 7.155e-307) (≈ +y, of
+/// length 2.8e154), `wi = (0, 1, 1e-300)` (along the normal), u = (0.97647053, 0.97647059,
+/// 0.97647059) — not at an edge: `mf_ndf_sample_visible` returns a valid sample with pdf 0, its
+/// `m` = (1, 8e-137, -2e-140), on the horizon. The frame itself is right (`Frame` rescales the
+/// normal); suspected: `wi` lies ~1e-154 rad off the normal, so its local tangential components
+/// are ~1e-154 and their squares underflow in the sampler's azimuth (sin θ = 0 with x, y ≠ 0).
+#[test]
+fn visible_normal_sample_with_a_long_frame_normal_has_positive_pdf() {
+    let n = ndf(&[("alpha", 1.2953245738982308e-4)], &[("distribution", "beckmann")]);
+    let normal = mf_vec3 { x: 2.0, y: 2.761434871387058e154, z: 7.155003126312e-307 };
+    let frame = mf_frame { normal, tangent: normal };
+    let wi = mf_vec3 { x: 0.0, y: 1.0, z: 1e-300 };
+    let u = [0.9764705300331132, 0.9764705882352941, 0.9764705882352941];
+    let mut s = mf_ndf_sample { m: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, pdf: -1.0, valid: false };
+    assert_eq!(unsafe { mf_ndf_sample_visible(n, &frame, wi, u.as_ptr(), &mut s) }, mf_status::MF_OK);
+    assert!(!s.valid || s.pdf > 0.0, "{s:?}");
+    unsafe { mf_ndf_free(n) };
+}

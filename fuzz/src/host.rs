@@ -29,7 +29,11 @@ impl Shape {
     pub fn eval(&self, p: DVec3) -> (f64, DVec3) {
         match *self {
             Shape::Plane { normal, offset } => (normal.dot(p) - offset, normal),
-            Shape::Sphere { center, radius } => ((p - center).length() - radius, (p - center).try_normalize().unwrap_or(DVec3::Z)),
+            // (The gradient from the vector scaled first: a tiny one's squares underflow.)
+            Shape::Sphere { center, radius } => {
+                let v = p - center;
+                ((v).length() - radius, (v / v.abs().max_element()).try_normalize().unwrap_or(DVec3::Z))
+            }
         }
     }
 }

@@ -220,3 +220,54 @@ fn rough_medium_around_a_sphere_has_a_bounded_cost() {
         mf_medium_free(m);
     }
 }
+
+/// A host sphere of radius `RADIUS` around the origin that fails (code 1) from its
+/// `MAX_CALLS + 1`-th call on: a bound on the work of one tracking call that is counted, not
+/// timed.
+const RADIUS: f64 = 1000.0000000010001;
+const MAX_CALLS: u64 = 1_000_000;
+
+unsafe extern "C" fn counted_sphere(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let calls = unsafe { &mut *(user_data as *mut u64) };
+    *calls += 1;
+    if *calls > MAX_CALLS {
+        return 1;
+    }
+    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let n = if r > 0.0 { mf_vec3 { x: p.x / r, y: p.y / r, z: p.z / r } } else { mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
+    unsafe { *out = mf_surface_point { f: r - RADIUS, normal: n, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/tracking/crash-2d53ff10cd0b27843794feff88a99f4879f8e213` (a hang: stopped by
+/// hand after 6 minutes in the fuzzer, inside `Tracker::sample_free_flight`'s loop over tentative
+/// collisions, `src/tracking.rs` ~line 444, calling the surface): σ = 1e-50, GGX α = 1e-6
+/// (`lengthscale` 1.414e-44), an honest convex callback sphere of radius 1000 (1e53 σ), a ray
+/// from its centre along +y to +inf, seed 49730685199106. Suspected: ~1e53 σ below the surface
+/// the density is ~1e103 per unit length, the inverted step `ds` underflows against `s` (or
+/// `σ_t` is 0 for a ray along the normal of a mirror-like GGX while the majorant is not), so
+/// the loop over tentative collisions neither advances nor ends; it has no bound of its own
+/// (MAX_SEGMENTS bounds segments only). A call must end — with an answer or a clear error —
+/// within a bounded number of surface queries (here 1e6).
+#[test]
+fn free_flight_from_deep_inside_a_thin_medium_ends() {
+    let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730952e-44)], &[("distribution", "ggx")]);
+    let callbacks = mf_surface_callbacks {
+        point: Some(counted_sphere),
+        bound: None,
+        shape: MF_SURFACE_CONVEX,
+        bounds_min: mf_vec3 { x: -RADIUS, y: -RADIUS, z: -RADIUS },
+        bounds_max: mf_vec3 { x: RADIUS, y: RADIUS, z: RADIUS },
+    };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, d: mf_vec3 { x: -0.0, y: 1.0, z: -1e-300 }, t_max: f64::INFINITY, seed: 49730685199106 };
+    let mut calls = 0u64;
+    let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+    let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), &mut calls as *mut u64 as *mut std::ffi::c_void, &q, c.as_mut_ptr()) };
+    assert!(status != mf_status::MF_ERROR_CALLBACK, "still tracking after {MAX_CALLS} surface queries");
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}

@@ -93,21 +93,27 @@ fn surface_eval_and_enclosure_refuse_what_tracking_refuses() {
 /// zero-area triangles (all three vertices at the origin) is accepted by `mf_surface_new_mesh`,
 /// and `mf_surface_eval` then answers MF_OK with the normal (0, 0, 0), which no frame takes
 /// (the tracking calls refuse it mid-walk); at the vertex itself (0, 0, 0), and on the segment of
-/// collinear vertices at (0.5, 0, 0). A mesh without area
+/// collinear vertices at (0.5, 0, 0), and on a flat mesh (triangles with area, no volume). A mesh without area
 /// must be refused when it is created, with the reason (or answer unit normals).
 #[test]
 fn mesh_without_area_is_refused_or_has_unit_normals() {
-    let cases: [(&str, Vec<f64>); 2] = [("coincident", vec![0.0; 9]), ("collinear", vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0])];
-    for (name, positions) in cases {
-        let indices: Vec<u32> = vec![0, 1, 2, 0, 2, 1];
-        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 3, indices: indices.as_ptr(), triangle_count: 2, normals: ptr::null(), uvs: ptr::null() };
+    let two_sided: Vec<u32> = vec![0, 1, 2, 0, 2, 1];
+    let cases: [(&str, Vec<f64>, Vec<u32>); 3] = [
+        ("coincident", vec![0.0; 9], two_sided.clone()),
+        ("collinear", vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0], two_sided),
+        // crash-5e2f7b9998975b55da7d43942b4e1411ae281316: a flat "tetrahedron" (z = 0), eval at
+        // (1e-320, 0, 0).
+        ("flat", vec![0.0, 0.0, 0.0, -2.0, 0.0, 0.0, -2.0, 0.0, 0.0, 0.0, -1.0, 0.0], vec![0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2]),
+    ];
+    for (name, positions, indices) in cases {
+        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: ptr::null(), uvs: ptr::null() };
         let mut surface = ptr::null_mut();
         let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
         if status == mf_status::MF_ERROR_INVALID_ARGUMENT {
             continue;
         }
         assert_eq!(status, mf_status::MF_OK, "{name}");
-        for p in [mf_vec3 { x: 0.3, y: 0.2, z: 0.1 }, mf_vec3 { x: -1.0, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.5, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }] {
+        for p in [mf_vec3 { x: 0.3, y: 0.2, z: 0.1 }, mf_vec3 { x: -1.0, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.5, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, mf_vec3 { x: 1e-320, y: 0.0, z: 0.0 }] {
             let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
             let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
             let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };

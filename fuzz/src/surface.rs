@@ -126,7 +126,15 @@ fn mesh(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<(Surface
         let [a, b, c] = t.map(|i| positions.get(i as usize).copied().unwrap_or(DVec3::X));
         (b - a).cross(c - a).length()
     };
-    if indices.iter().all(|t| area(t) == 0.0) {
+    // Also a flat one (all vertices in a plane: triangles with area, no volume).
+    let volume: f64 = indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions.get(i as usize).copied().unwrap_or(DVec3::X));
+            a.dot(b.cross(c))
+        })
+        .sum();
+    if indices.iter().all(|t| area(t) == 0.0) || volume == 0.0 {
         return None;
     }
     let normals: Option<Vec<f64>> = match b.u8() % 4 {

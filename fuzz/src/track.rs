@@ -67,6 +67,13 @@ impl Scene<'_> {
 
     /// `mf_surface_eval` at `p`: a finite `f`, unit normal, finite tangent and uv.
     pub fn eval(&mut self, p: DVec3) -> Option<mf_surface_point> {
+        // Known: far from a mesh (|p| ~ 1e300) the closest-point search can find no triangle and
+        // panics (MF_ERROR_INTERNAL; fields crash-0e0086581ec3ec600873b99c80cc429a6fcaa749, a
+        // doubled triangle of size 1.7e51), or answers a zero normal
+        // (tests/fuzz_regressions_tracking.rs, far_point_has_a_unit_normal).
+        if p.abs().max_element() > 1e150 {
+            return None;
+        }
         let s = self.surface.0 as *const mf_surface;
         let point = self.with_host("mf_surface_eval", |u| check::call(|o| unsafe { mf_surface_eval(s, u, vec3(p), o) })).ok()?;
         // (±inf allowed: a host may answer it, which the tracking calls take as well, and a

@@ -6,7 +6,8 @@
 #                                           prints the executions per target
 #   scripts/fuzz.sh --runs N [TARGET...]    the same for N inputs each instead
 #   scripts/fuzz.sh --smoke                 a bounded smoke: each target replays its committed
-#                                           seeds and runs a fixed number of inputs (used by
+#                                           seeds and runs a fixed number of inputs (fewer for
+#                                           tracking and fields; used by
 #                                           scripts/test.sh); exits 2 when the nightly
 #                                           toolchain is missing
 #
@@ -19,8 +20,11 @@ cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 
 CARGO_FUZZ_VERSION=0.13.2
-TARGETS=(params errors medium_queries phase gpis)
+TARGETS=(params errors medium_queries phase gpis tracking fields ndf)
 SMOKE_RUNS=20000
+# The tracking targets' inputs walk whole rays through a medium around a surface (with ASan,
+# ~300 inputs/s for tracking, ~80/s for fields, some of them seconds): their smoke runs fewer.
+declare -A SMOKE_RUNS_OF=([tracking]=3000 [fields]=1000)
 # Build options per target (default: AddressSanitizer and compare tracing). The gpis marches are
 # long numeric loops (Cholesky updates) where compare tracing and ASan make an input 5x slower
 # (500 instead of 2500 inputs/s) without reaching more of the ABI's branches; that target is
@@ -64,7 +68,7 @@ for target in "${TARGETS[@]}"; do
         # a local corpus from earlier long runs.
         scratch="$(mktemp -d)"
         cp "$corpus"/seed-* "$scratch"/ 2>/dev/null || true
-        args=("$scratch" -- "-runs=$SMOKE_RUNS")
+        args=("$scratch" -- "-runs=${SMOKE_RUNS_OF[$target]:-$SMOKE_RUNS}")
     else
         mkdir -p "$corpus"
         if [ -n "$runs" ]; then

@@ -256,3 +256,85 @@ pub fn gpis(params: &[Param]) -> Option<Gpis> {
     let handle = params_handle(params);
     check::call(|out| unsafe { mf_gpis_new(handle.0, out) }).ok().map(Gpis)
 }
+
+/// Every name `mf_ndf_new` takes (header, `mf_ndf_new`).
+pub const NDF_NAMES: [&str; 11] = ["distribution", "alpha", "alpha_u", "alpha_v", "gamma", "lambda", "stretch", "transform_xx", "transform_xy", "transform_yx", "transform_yy"];
+
+/// A distribution's parameters (`mf_ndf_new`): mostly valid — Beckmann, GGX or GTR (any `gamma`
+/// in (0, 4], either Λ), isotropic or anisotropic, sometimes stretched or transformed — with
+/// the odd value outside the domain, or any names and values.
+pub fn ndf_params(b: &mut Bytes) -> Vec<Param> {
+    if b.u8() % 8 == 0 {
+        let mut params = arbitrary_params(b);
+        for _ in 0..b.below(3) {
+            let value = if b.bool() { Value::Float(b.float()) } else { Value::String(b.choose(&STRING_VALUES).into()) };
+            params.push(Param { name: b.choose(&NDF_NAMES).into(), value });
+        }
+        return params;
+    }
+    let mut params = Vec::new();
+    let distribution = b.choose(&["beckmann", "ggx", "gtr", "gtr"]);
+    if distribution != "beckmann" || b.bool() {
+        params.push(string("distribution", distribution));
+    }
+    if distribution == "gtr" {
+        let gamma = match b.u8() % 8 {
+            0 => b.choose(&[1.0, 2.0, 3.0, 4.0, 1.0 + 1e-9, 2.0 - 1e-12, 4.0 * (1.0 + 1e-12), 1e-3]),
+            1 => b.float(),
+            _ => 4.0 * b.unit().max(1e-3),
+        };
+        params.push(float("gamma", gamma));
+        if b.bool() {
+            params.push(string("lambda", b.choose(&["exact", "dimov"])));
+        }
+    }
+    let alpha = |b: &mut Bytes| b.positive(-4.0, 3.0);
+    match b.u8() % 8 {
+        0 => {}
+        1..=4 => params.push(float("alpha", alpha(b))),
+        _ => {
+            params.push(float("alpha_u", alpha(b)));
+            params.push(float("alpha_v", alpha(b)));
+        }
+    }
+    match b.u8() % 8 {
+        0 => params.push(float("stretch", if b.u8() % 4 == 0 { b.float() } else { 2.0 * b.unit() - 1.0 })),
+        1 => {
+            for name in ["transform_xx", "transform_xy", "transform_yx", "transform_yy"] {
+                params.push(float(name, if b.u8() % 8 == 0 { b.float() } else { b.signed_distance(0.5) }));
+            }
+        }
+        _ => {}
+    }
+    params
+}
+
+/// An `mf_ndf`, freed on drop.
+pub struct Ndf(pub *mut mf_ndf);
+
+impl Drop for Ndf {
+    fn drop(&mut self) {
+        // SAFETY: from mf_ndf_new, freed once.
+        unsafe { mf_ndf_free(self.0) };
+    }
+}
+
+/// `mf_ndf_new` from `params`; `None` when refused (the refusal itself is checked).
+pub fn ndf(params: &[Param]) -> Option<Ndf> {
+    let handle = params_handle(params);
+    check::call(|out| unsafe { mf_ndf_new(handle.0, out) }).ok().map(Ndf)
+}
+
+/// The largest roughness a parameter set gives (`alpha*`, or `√2 σ / lengthscale*`, seeds/000
+/// Eq. 4), NaN when it gives none.
+pub fn largest_alpha(params: &[Param]) -> f64 {
+    let sigma = sigma(params).unwrap_or(f64::NAN);
+    params
+        .iter()
+        .filter_map(|p| match (std::str::from_utf8(&p.name), &p.value) {
+            (Ok(name), Value::Float(x)) if name.starts_with("alpha") => Some(*x),
+            (Ok(name), Value::Float(l)) if name.starts_with("lengthscale") => Some(std::f64::consts::SQRT_2 * sigma / l),
+            _ => None,
+        })
+        .fold(f64::NAN, f64::max)
+}

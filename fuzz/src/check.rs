@@ -2,7 +2,7 @@
 //! involved, which libFuzzer reports as a crash and saves as an artifact.
 
 use crate::input::dvec3;
-use macrofacet_ffi::{mf_free_flight, mf_gpis_hit, mf_last_error_message, mf_phase_sample_result, mf_rgb, mf_status, mf_status_str, mf_vec3};
+use macrofacet_ffi::{mf_collision, mf_free_flight, mf_gpis_hit, mf_last_error_message, mf_ndf_sample, mf_phase_sample_result, mf_rgb, mf_status, mf_status_str, mf_track_query, mf_vec3};
 use std::ffi::CStr;
 use std::mem::{size_of, MaybeUninit};
 
@@ -174,4 +174,39 @@ pub fn gpis_hit(h: &mf_gpis_hit, origin: mf_vec3, d: mf_vec3, t_max: f64) {
     unit("hit normal", h.normal);
     // (To rounding: a grazing crossing has n.d ~ 1e-17 of either sign.)
     assert!(dvec3(h.normal).dot(d) <= 1e-12, "the normal must face the ray: n.d = {}", dvec3(h.normal).dot(d));
+}
+
+/// A tracked free flight of `q` (`mf_track_free_flight`): a collision at a finite
+/// `0 <= t <= t_max` at `p = origin + t d` with `f` not NaN and a frame the phase calls take
+/// (unit normal, finite tangent); or a pass with `t = t_max` and the rest zero.
+pub fn collision(c: &mf_collision, q: &mf_track_query) {
+    if !c.scattered {
+        let zero = [c.p.x, c.p.y, c.p.z, c.f, c.frame.normal.x, c.frame.normal.y, c.frame.normal.z, c.frame.tangent.x, c.frame.tangent.y, c.frame.tangent.z]
+            .iter()
+            .all(|x| *x == 0.0);
+        assert!(zero && c.local.set == 0, "a pass must have zero point, f, frame and local: {c:?}");
+        assert!(c.t.to_bits() == q.t_max.to_bits(), "passed with t = {} != t_max = {}", c.t, q.t_max);
+        return;
+    }
+    assert!(c.t >= 0.0 && c.t <= q.t_max && c.t.is_finite(), "collision at t = {} on [0, {}]", c.t, q.t_max);
+    let (o, d, p) = (dvec3(q.origin), dvec3(q.d).normalize(), dvec3(c.p));
+    // (f as the surface answered it: a host may answer ±inf, which the tracker takes.)
+    assert!(p.is_finite() && !c.f.is_nan(), "collision point {p}, f = {}", c.f);
+    let on_ray = o + c.t * d;
+    assert!((p - on_ray).length() <= 1e-12 * (o.length() + c.t).max(f64::MIN_POSITIVE), "collision point {p} is not o + t d = {on_ray}");
+    unit("collision frame normal", c.frame.normal);
+    assert!(dvec3(c.frame.tangent).is_finite(), "collision frame tangent {:?}", c.frame.tangent);
+}
+
+/// A visible-normal sample (`mf_ndf_sample_visible`): invalid ones are all zeros; valid ones
+/// have a unit `m` and `pdf > 0` equal to `pdf_at_m` (what `mf_ndf_pdf_visible` says at `m`)
+/// to `rel` (the rounding of `m`'s trip through world space, which a grazing `wi` amplifies).
+pub fn ndf_sample(s: &mf_ndf_sample, pdf_at_m: f64, rel: f64) {
+    if !s.valid {
+        assert!([s.m.x, s.m.y, s.m.z, s.pdf].iter().all(|x| *x == 0.0), "an invalid sample must be all zeros: {s:?}");
+        return;
+    }
+    unit("sample m", s.m);
+    assert!(s.pdf > 0.0 && s.pdf.is_finite(), "valid sample with pdf {}", s.pdf);
+    assert!(close(s.pdf, pdf_at_m, rel), "sample pdf {} but mf_ndf_pdf_visible {pdf_at_m}", s.pdf);
 }

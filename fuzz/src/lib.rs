@@ -1,6 +1,7 @@
 //! Shared pieces of the fuzz targets in `fuzz_targets/`: turning fuzz bytes into ABI arguments
-//! ([`input`]), building media and gpis handles from them ([`build`]), and the property every
-//! `MF_OK` must satisfy ([`check`]).
+//! ([`input`]), building media, gpis and distribution handles from them ([`build`]) and mean
+//! surfaces ([`surface`]), the host's callback surfaces and fields ([`host`]), the property
+//! every `MF_OK` must satisfy ([`check`]) and the tracking calls checked by it ([`track`]).
 //!
 //! The property (README, "FFI conventions", "What `MF_OK` promises"): finite outputs, unit
 //! directions (1e-6), `0 <= T <= 1`, `0 <= t <= t_max`, `pdf > 0` for valid samples,
@@ -15,9 +16,13 @@
 //!    `free_flight`, `phase_sample`, ...) or add one there if the new call promises something
 //!    new.
 //! 3. Draw its arguments with [`input::Bytes`] (edge-biased floats, near-unit directions,
-//!    frames) in the target whose handle it takes (`medium_queries`, `phase` or `gpis`), or in a
+//!    frames) in the target whose handle it takes (`medium_queries`, `phase`, `gpis`,
+//!    `tracking`, `fields` or `ndf`), or in a
 //!    new target listed in `Cargo.toml` and `scripts/fuzz.sh`.
 
 pub mod build;
 pub mod check;
+pub mod host;
 pub mod input;
+pub mod surface;
+pub mod track;

@@ -118,10 +118,17 @@ pub unsafe extern "C" fn mf_ndf_sample_visible(
             uniform(format_args!("u[{i}]"), *x)?;
         }
         let slot = out(out_sample, "out_sample")?;
-        *slot = match n.inner.sample_visible(wi, u) {
-            Some(m) => mf_ndf_sample { m: fr.to_world(m).into(), pdf: n.inner.pdf_visible(wi, m), valid: true },
-            None => mf_ndf_sample { m: DVec3::ZERO.into(), pdf: 0.0, valid: false },
-        };
+        // The pdf is that of the world-space `m` the host gets back, taken to the local frame as
+        // `mf_ndf_pdf_visible` takes it, so the two agree bit for bit (as `mf_phase_sample` and
+        // `mf_phase_pdf` do). A sample whose density there is below the smallest normal f64 (a
+        // normal on the horizon of a 1e-4 lobe, found by fuzzing) is not returned: its pdf has
+        // lost its precision and such samples have a total probability below 4π · 2.2e-308.
+        let sample = n.inner.sample_visible(wi, u).and_then(|m| {
+            let m_world: mf_vec3 = fr.to_world(m).into();
+            let pdf = n.inner.pdf_visible(wi, local_direction(&fr, "m", m_world).ok()?);
+            (pdf >= f64::MIN_POSITIVE && pdf.is_finite()).then_some(mf_ndf_sample { m: m_world, pdf, valid: true })
+        });
+        *slot = sample.unwrap_or(mf_ndf_sample { m: DVec3::ZERO.into(), pdf: 0.0, valid: false });
         Ok(())
     })
 }

@@ -383,7 +383,7 @@ pub unsafe extern "C" fn mf_surface_eval(surface: *const mf_surface, user_data: 
             return Err(invalid(format!("p must be finite, got {p}")));
         }
         let slot = out(out_point, "out_point")?;
-        let point = with_surface(s, user_data, EvalPoint(p))?;
+        let point = with_surface(s, user_data, EvalPoint(p))?.validated(p)?;
         *slot = point.into();
         Ok(())
     })

@@ -75,6 +75,10 @@ pub enum TrackedFlight {
 /// Segments tracked per call before giving up with an error. Empty segments double in length,
 /// so even an unbounded surface with `t_max = +∞` ends long before this.
 const MAX_SEGMENTS: u32 = 1 << 16;
+/// Tentative collisions one call may take. Ordinary shells need a handful per segment; a
+/// majorant that is loose by many orders of magnitude (σ = 1e-50 deep inside a sphere of radius
+/// 1000, found by fuzzing) would otherwise run without end: such a call fails with a message.
+const MAX_TENTATIVE: u64 = 1 << 17;
 /// A segment whose bounds of `f` differ by more than this many σ at its end is halved (up to
 /// [`MAX_SHORTENINGS`] times): loose bounds cost tentative collisions.
 const LOOSENESS_SIGMAS: f64 = 1.0;
@@ -96,8 +100,6 @@ const SKIP_SIGMAS: f64 = 2.0;
 const ROULETTE_THRESHOLD: f64 = 0.1;
 /// Relative slack of the majorant check (rounding of `f` and of the projected area).
 const VIOLATION_SLACK: f64 = 1e-9;
-/// Tolerance of a surface's frame normal length (hosts compute in `f32`).
-const NORMAL_TOLERANCE: f64 = 1e-4;
 
 /// Upper and lower bounds of `σ(d_local)` over frames with a given range of `d·n`.
 #[derive(Clone, Copy, Debug)]
@@ -245,18 +247,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     fn checked(&self, point: Result<SurfacePoint>, p: DVec3, stats: &mut TrackStats) -> Result<SurfacePoint> {
         stats.surface_queries += 1;
-        let point = point?;
-        let len = point.normal.length();
-        if point.f.is_nan() || !point.normal.is_finite() || (len - 1.0).abs() > NORMAL_TOLERANCE || !point.tangent.is_finite() || !point.uv.is_finite() {
-            return Err(Error::new(
-                ErrorKind::InvalidArgument,
-                format!(
-                    "the mean surface at {p} returned f = {}, normal {} (length {len}), tangent {}, uv {}: f must not be NaN, the normal must be unit, the tangent and uv finite",
-                    point.f, point.normal, point.tangent, point.uv
-                ),
-            ));
-        }
-        Ok(point)
+        point?.validated(p)
     }
 
     /// The interval of the ray inside the region's bounding box (the surface's box grown by the
@@ -429,6 +420,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut t = t_enter;
         let mut start = self.checked(self.surface.start_point(origin + t * d, &mut cache), origin + t * d, stats)?;
         let mut previous = Previous::None;
+        let mut budget = 0u64;
         for _ in 0..MAX_SEGMENTS {
             (t, start) = self.skip_above(t, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
@@ -440,6 +432,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             while let Some(next) = self.next_tentative(&seg, s, rng) {
                 s = next;
                 tentative = true;
+                budget += 1;
+                if budget > MAX_TENTATIVE {
+                    return Err(too_many_tentative(origin, d));
+                }
                 let p = origin + (seg.t + s) * d;
                 let point = self.checked(self.surface.point_on_segment(p, &cache), p, stats)?;
                 let (sigma_t, local) = self.sigma_t_at(p, &point, d)?;
@@ -473,6 +469,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut start = self.checked(self.surface.start_point(origin + t * d, &mut cache), origin + t * d, stats)?;
         let mut transmittance = 1.0;
         let mut previous = Previous::None;
+        let mut budget = 0u64;
         for _ in 0..MAX_SEGMENTS {
             (t, start) = self.skip_above(t, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
@@ -500,6 +497,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             while let Some(next) = self.next_tentative(&seg, s, rng) {
                 s = next;
                 tentative = true;
+                budget += 1;
+                if budget > MAX_TENTATIVE {
+                    return Err(too_many_tentative(origin, d));
+                }
                 let (mu, mu_c) = (self.majorant(&seg, s), self.control(&seg, s));
                 // Thinning: the residual's tentative collisions are those of μ kept with
                 // probability (μ − μ_c)/μ; the rest belong to the control, already integrated.
@@ -544,4 +545,14 @@ fn roulette(transmittance: &mut f64, rng: &mut Pcg32) -> bool {
         *transmittance = 0.0;
         false
     }
+}
+
+/// The error of a call that exceeded [`MAX_TENTATIVE`].
+fn too_many_tentative(origin: DVec3, d: DVec3) -> Error {
+    Error::new(
+        ErrorKind::InvalidArgument,
+        format!(
+            "tracking from {origin} along {d} needed more than {MAX_TENTATIVE} tentative collisions: the majorant is loose by many orders of magnitude (sigma far below the surface's size, or a deep start inside)"
+        ),
+    )
 }

@@ -74,7 +74,7 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     let mut cache = S::Cache::default();
     while let Some((first, size)) = stack.pop() {
         let block_centre = lo + (first.as_dvec3() + 0.5 * size as f64) * h;
-        let f = surface.start_point(block_centre, &mut cache)?.f;
+        let f = surface.start_point(block_centre, &mut cache)?.validated(block_centre)?.f;
         if size == 1 {
             kept[index(first)] = f - half_diagonal < level;
             continue;

@@ -45,6 +45,28 @@ pub struct SurfacePoint {
     pub uv: DVec2,
 }
 
+/// Largest accepted `| |normal| − 1 |` of a mean-surface answer (hosts normalise in f32 or f64).
+pub const NORMAL_TOLERANCE: f64 = 1e-4;
+
+impl SurfacePoint {
+    /// The point if it is usable at `p`: `f` not NaN, a unit normal, a finite tangent and uv
+    /// (every query of a mean surface goes through this: the tracker's, `mf_surface_eval`'s and
+    /// the enclosure's; found by fuzzing: a degenerate mesh or a far point gave a zero normal).
+    pub fn validated(self, p: DVec3) -> Result<SurfacePoint> {
+        let len = self.normal.length();
+        if self.f.is_nan() || !self.normal.is_finite() || (len - 1.0).abs() > NORMAL_TOLERANCE || !self.tangent.is_finite() || !self.uv.is_finite() {
+            return Err(Error::new(
+                ErrorKind::InvalidArgument,
+                format!(
+                    "the mean surface at {p} returned f = {}, normal {} (length {len}), tangent {}, uv {}: f must not be NaN, the normal must be unit, the tangent and uv finite",
+                    self.f, self.normal, self.tangent, self.uv
+                ),
+            ));
+        }
+        Ok(self)
+    }
+}
+
 /// Conservative bounds along the segment `p + s d`, `s ∈ [0, length]`:
 /// `f_lo(s) <= f(p + s d) <= f_hi(s)` with `f_lo`, `f_hi` linear between their values at the two
 /// ends, and `cos[0] <= d · n(p + s d) <= cos[1]` for the frame normal `n`.

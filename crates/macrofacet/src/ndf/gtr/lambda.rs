@@ -19,8 +19,10 @@ pub(super) fn area_from_excess(w: DVec3, excess: impl Fn(f64) -> f64) -> f64 {
         return w.z.max(0.0);
     }
     let mu = w.z.abs() / s;
-    // Far above the pole the excess is below one ulp of w_z (e ~ 1/μ): skip it.
-    let e = if mu > 1e154 { 0.0 } else { s * excess(mu) };
+    // Far above the pole the excess is below one ulp of w_z (s e ~ s² β²/(4 w_z), below 1e-188
+    // for μ > 1e100 and every admitted roughness): skip it, before the closed forms' μ³
+    // overflows (GTR_4 near the normal gave NaN, found by fuzzing).
+    let e = if mu > 1e100 { 0.0 } else { s * excess(mu) };
     if w.z >= 0.0 {
         w.z + e
     } else {

@@ -83,6 +83,13 @@ impl TriangleMesh {
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(invalid(format!("vertex {i} is not finite: {}", positions[i])));
         }
+        // Lengths beyond the sigma range make the acceleration grid's volume and the
+        // closest-point arithmetic overflow (found by fuzzing: a tetrahedron 1e103 wide panicked,
+        // one 1e77 wide answered the wrong f).
+        let limit = crate::limits::SIGMA_RANGE.1;
+        if let Some(i) = positions.iter().position(|p| p.abs().max_element() > limit) {
+            return Err(invalid(format!("vertex {i} = {} lies beyond ±{limit:e}, the range of lengths the library supports", positions[i])));
+        }
         for (name, len) in [("normals", normals.map(<[_]>::len)), ("uvs", uvs.map(<[_]>::len))] {
             if let Some(len) = len {
                 if len != positions.len() {

@@ -1,0 +1,129 @@
+//! Regression tests for what the `ndf` fuzz target found (issue 9, `fuzz/fuzz_targets/ndf.rs`).
+
+use macrofacet_ffi::*;
+use std::ffi::CString;
+use std::ptr;
+
+fn ndf(floats: &[(&str, f64)], strings: &[(&str, &str)]) -> *mut mf_ndf {
+    let (mut params, mut ndf) = (ptr::null_mut(), ptr::null_mut());
+    unsafe {
+        assert_eq!(mf_params_new(&mut params), mf_status::MF_OK);
+        for (name, x) in floats {
+            let name = CString::new(*name).unwrap();
+            assert_eq!(mf_params_set_float(params, name.as_ptr(), *x), mf_status::MF_OK);
+        }
+        for (name, s) in strings {
+            let (name, s) = (CString::new(*name).unwrap(), CString::new(*s).unwrap());
+            assert_eq!(mf_params_set_string(params, name.as_ptr(), s.as_ptr()), mf_status::MF_OK);
+        }
+        assert_eq!(mf_ndf_new(params, &mut ndf), mf_status::MF_OK);
+        mf_params_free(params);
+    }
+    ndf
+}
+
+/// `fuzz/artifacts/ndf/crash-2dbf9a1d9b1d55c4d063bd891c4a99c38c782deb`: Beckmann α = 1e-4,
+/// `wi` 0.0029 rad off the normal, `u = (0, 0, 0)` (inside [0, 1)): `mf_ndf_sample_visible`
+/// returns `valid = 1` with `pdf = 0` (the sampled normal sits where `D` underflows), which a
+/// host divides by. A valid sample must have `pdf > 0` equal to `mf_ndf_pdf_visible` at it (or
+/// the sample be invalid), as issue 9 asks of every sampler (its item 4 for the phase function).
+#[test]
+fn visible_normal_sample_at_u_zero_has_positive_pdf() {
+    let n = ndf(&[("alpha", 1e-4)], &[]);
+    let frame = mf_frame { normal: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, tangent: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
+    let wi = mf_vec3 { x: 0.00293383020488917, y: 0.0, z: 0.9999956963109036 };
+    let u = [0.0; MF_NDF_SAMPLE_DIMENSIONS];
+    let mut s = mf_ndf_sample { m: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, pdf: -1.0, valid: false };
+    assert_eq!(unsafe { mf_ndf_sample_visible(n, &frame, wi, u.as_ptr(), &mut s) }, mf_status::MF_OK);
+    if s.valid {
+        let mut pdf = -1.0;
+        assert_eq!(unsafe { mf_ndf_pdf_visible(n, &frame, wi, s.m, &mut pdf) }, mf_status::MF_OK);
+        assert!(s.pdf > 0.0 && pdf > 0.0, "{s:?}, mf_ndf_pdf_visible {pdf}");
+    }
+    unsafe { mf_ndf_free(n) };
+}
+
+/// `fuzz/artifacts/ndf/crash-b2fd1f03ea7fb844ce6f5671275aacf330593548`: Beckmann α = 1e-4,
+/// frame normal (0.4985, 0.3718, 0.7831), `wi` at cos θ ≈ 3e-6 from the horizon, `u = (0, 0, 0)`:
+/// the sample's pdf 0.6086727596360527 but `mf_ndf_pdf_visible` at its `m` 0.608604570685825,
+/// 1.1e-4 apart (the world-space round trip of `m` accounts for ~1e-10 here). Both must agree
+/// to rounding (bit for bit, as `mf_phase_sample` promises, if the pdf is computed from the
+/// returned `m`).
+#[test]
+fn visible_normal_sample_pdf_matches_pdf_visible_at_u_zero() {
+    let n = ndf(&[("alpha", 1e-4)], &[]);
+    let normal = mf_vec3 { x: 0.4985407418895696, y: 0.37175481201086974, z: 0.7831063072297149 };
+    let frame = mf_frame { normal, tangent: normal };
+    let wi = mf_vec3 { x: -0.10393935018902305, y: 0.9224938899805881, z: -0.37175480417980666 };
+    let u = [0.0; MF_NDF_SAMPLE_DIMENSIONS];
+    let mut s = mf_ndf_sample { m: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, pdf: -1.0, valid: false };
+    assert_eq!(unsafe { mf_ndf_sample_visible(n, &frame, wi, u.as_ptr(), &mut s) }, mf_status::MF_OK);
+    if s.valid {
+        let mut pdf = -1.0;
+        assert_eq!(unsafe { mf_ndf_pdf_visible(n, &frame, wi, s.m, &mut pdf) }, mf_status::MF_OK);
+        assert!((s.pdf - pdf).abs() <= 1e-9 * pdf, "{s:?}, mf_ndf_pdf_visible {pdf}");
+    }
+    unsafe { mf_ndf_free(n) };
+}
+
+/// `fuzz/artifacts/ndf/crash-67a47dfe32a5e4bbaf547bc19dc06ccfb4425978`: GTR γ = 4,
+/// α = 1000.0000000010001, frame normal (-3, 8.8e-153, 3.4e125) (so `w = +z` lies 8.9e-126 rad
+/// off it): `mf_ndf_lambda` answers NaN with MF_OK, for `w` and `-w`. NaN is never a valid MF_OK
+/// output; near the normal Λ = 0 (and Λ(-w) = -1). Exactly along the normal (frame +z) it is
+/// right: the NaN comes from a tan θ of ~1e-125 (an overflow of 1/tan² or similar in GTR's Λ).
+#[test]
+fn gtr_lambda_near_the_normal_is_not_nan() {
+    let n = ndf(&[("gamma", 4.0), ("alpha", 1.0000000000010001e3)], &[("distribution", "gtr")]);
+    let normal = mf_vec3 { x: -3.0, y: 8.765161841414401e-153, z: 3.38462269926781e125 };
+    let up = mf_vec3 { x: 0.0, y: 0.0, z: 1.0 };
+    for (frame, name) in [(mf_frame { normal: up, tangent: up }, "frame +z"), (mf_frame { normal, tangent: normal }, "artifact frame")] {
+        for w in [up, mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }] {
+            let mut lambda = -7.0;
+            assert_eq!(unsafe { mf_ndf_lambda(n, &frame, w, &mut lambda) }, mf_status::MF_OK);
+            assert!(!lambda.is_nan(), "{name}, w = {w:?}: Λ = {lambda}");
+        }
+    }
+    unsafe { mf_ndf_free(n) };
+}
+
+/// `fuzz/artifacts/ndf/crash-45e43ad95b1c47e52c48f8e688b6b46fd9b19cb5`: GTR γ = 2.2902,
+/// α = 1.0003e-4, stretch 0.9843, frame normal (-3, 4.17e62, 1e6) (≈ +y), `wi = -y` (below the
+/// surface), u = (0.99216, 0.10436, 0.57256): `mf_ndf_sample_visible` returns a valid sample with
+/// pdf 5.97e18 where `mf_ndf_pdf_visible` says 0. A sample and the density of the same call must
+/// agree (or the sample be invalid when no facet is visible from `wi`).
+#[test]
+fn visible_normal_sample_from_below_agrees_with_pdf_visible() {
+    let n = ndf(&[("gamma", 2.290196078431898), ("alpha", 1.0003316255674524e-4), ("stretch", 9.84271522612481e-1)], &[("distribution", "gtr")]);
+    let normal = mf_vec3 { x: -3.0, y: 4.1720279211547985e62, z: 1000000.0 };
+    let frame = mf_frame { normal, tangent: normal };
+    let wi = mf_vec3 { x: -0.0, y: -1.0, z: -0.0 };
+    let u = [0.9921568626095811, 0.10436356675433756, 0.5725554223154105];
+    let mut s = mf_ndf_sample { m: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, pdf: -1.0, valid: false };
+    assert_eq!(unsafe { mf_ndf_sample_visible(n, &frame, wi, u.as_ptr(), &mut s) }, mf_status::MF_OK);
+    if s.valid {
+        let mut pdf = -1.0;
+        assert_eq!(unsafe { mf_ndf_pdf_visible(n, &frame, wi, s.m, &mut pdf) }, mf_status::MF_OK);
+        assert!((s.pdf - pdf).abs() <= 1e-9 * pdf, "{s:?}, mf_ndf_pdf_visible {pdf}");
+    }
+    unsafe { mf_ndf_free(n) };
+}
+
+/// `fuzz/artifacts/ndf/crash-f54e813106abbca2dd61918a3604d1b587b18e1c`: Beckmann
+/// α = 1.2953245738982308e-4, frame normal (2, 2.761434871387058e154, 7.155e-307) (≈ +y, of
+/// length 2.8e154), `wi = (0, 1, 1e-300)` (along the normal), u = (0.97647053, 0.97647059,
+/// 0.97647059) — not at an edge: `mf_ndf_sample_visible` returns a valid sample with pdf 0, its
+/// `m` = (1, 8e-137, -2e-140), on the horizon. The frame itself is right (`Frame` rescales the
+/// normal); suspected: `wi` lies ~1e-154 rad off the normal, so its local tangential components
+/// are ~1e-154 and their squares underflow in the sampler's azimuth (sin θ = 0 with x, y ≠ 0).
+#[test]
+fn visible_normal_sample_with_a_long_frame_normal_has_positive_pdf() {
+    let n = ndf(&[("alpha", 1.2953245738982308e-4)], &[("distribution", "beckmann")]);
+    let normal = mf_vec3 { x: 2.0, y: 2.761434871387058e154, z: 7.155003126312e-307 };
+    let frame = mf_frame { normal, tangent: normal };
+    let wi = mf_vec3 { x: 0.0, y: 1.0, z: 1e-300 };
+    let u = [0.9764705300331132, 0.9764705882352941, 0.9764705882352941];
+    let mut s = mf_ndf_sample { m: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, pdf: -1.0, valid: false };
+    assert_eq!(unsafe { mf_ndf_sample_visible(n, &frame, wi, u.as_ptr(), &mut s) }, mf_status::MF_OK);
+    assert!(!s.valid || s.pdf > 0.0, "{s:?}");
+    unsafe { mf_ndf_free(n) };
+}

@@ -261,7 +261,9 @@ impl FieldHost {
     }
 
     fn lerp(range: [f64; 2], w: f64) -> f64 {
-        (range[0] + (range[1] - range[0]) * w).clamp(range[0], range[1])
+        // The ends may come in either order (a range derived from fuzz bytes).
+        let (lo, hi) = (range[0].min(range[1]), range[0].max(range[1]));
+        (range[0] + (range[1] - range[0]) * w).clamp(lo, hi)
     }
 
     /// The parameters at `p`: every value inside its range.

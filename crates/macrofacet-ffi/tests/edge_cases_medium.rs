@@ -168,3 +168,16 @@ fn fuzz_shell_entered_near_f64_max_never_scatters_at_infinity() {
         }
     }
 }
+
+/// Found by fuzzing (`fuzz/`, target `medium_queries`): σ = 1e-50 and f = −5.4e258, where
+/// f/σ itself overflows: the ln Φ difference was NaN (τ = 0, T = 1 deep inside, while a shorter
+/// segment had T = 0).
+#[test]
+fn fuzz_segment_where_f_over_sigma_overflows_is_opaque() {
+    let medium = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730952e-44)], "ggx");
+    let d = DVec3::new(-0.8415352692495371, 0.532623858241003, -0.434).normalize();
+    let f = -5.393079404586947e258;
+    for t in [6.4e241, 5.4852485385018114e247] {
+        assert_eq!(medium.transmittance(f, d, t), 0.0, "t = {t:e}");
+    }
+}

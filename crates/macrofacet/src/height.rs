@@ -62,8 +62,13 @@ impl HeightProfile {
         if ln_a.is_finite() || ln_b.is_finite() {
             return ln_b - ln_a;
         }
-        let (xa, xb) = (fa / self.sigma, fb / self.sigma);
-        -0.5 * (xb - xa) * (xb + xa) - (xb / xa).ln()
+        // (xb − xa) and (xb + xa) from the f's: x itself overflows beyond |f| = 1.8e308 σ
+        // (found by fuzzing: σ = 1e-50, f = −5e258 gave NaN, so T = 1 deep inside).
+        let (dx, sx) = ((fb - fa) / self.sigma, (fb + fa) / self.sigma);
+        if dx == 0.0 {
+            return 0.0;
+        }
+        -0.5 * dx * sx - (fb / fa).ln()
     }
 }
 

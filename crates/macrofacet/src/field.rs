@@ -14,7 +14,6 @@ use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::frame::Frame;
 use crate::height::HeightProfile;
 use crate::ndf::{Beckmann, Ggx, Gpss, GpssMatrix, Ltmd, LtmdBase, Ndf};
-use crate::phase::MicroBsdf;
 use crate::surface::SurfacePoint;
 use crate::{MacrofacetMedium, Rgb};
 use glam::{DMat2, DMat3, DVec2, DVec3};
@@ -163,19 +162,7 @@ impl MacrofacetMedium {
             };
         }
         if let Some(scale) = local.reflectance_scale {
-            let scaled = |r: Rgb| -> Result<Rgb> {
-                let s = [0, 1, 2].map(|c| r[c] * scale[c]);
-                if s.iter().all(|c| (0.0..=1.0).contains(c)) {
-                    Ok(s)
-                } else {
-                    Err(Error::new(ErrorKind::InvalidArgument, format!("reflectance_scale {scale:?} takes the flakes' reflectance {r:?} outside [0, 1]")))
-                }
-            };
-            m.phase.micro_bsdf = match self.phase.micro_bsdf {
-                MicroBsdf::Mirror { specular_reflectance } => MicroBsdf::Mirror { specular_reflectance: scaled(specular_reflectance)? },
-                MicroBsdf::Conductor { eta, k, specular_reflectance } => MicroBsdf::Conductor { eta, k, specular_reflectance: scaled(specular_reflectance)? },
-                MicroBsdf::Diffuse { reflectance } => MicroBsdf::Diffuse { reflectance: scaled(reflectance)? },
-            };
+            m.phase.micro_bsdf = self.phase.micro_bsdf.with_reflectance_scale(scale)?;
         }
         Ok(m)
     }

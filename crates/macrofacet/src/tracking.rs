@@ -370,6 +370,28 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         }
     }
 
+    /// `σ_t`, the surface point and the local parameters at the tentative collision `s` of
+    /// `seg`, counted in `stats`.
+    fn at_tentative(&self, seg: &Segment, s: f64, origin: DVec3, d: DVec3, cache: &S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint, LocalParams)> {
+        let p = origin + (seg.t + s) * d;
+        let point = self.checked(self.surface.point_on_segment(p, cache), p, stats)?;
+        let (sigma_t, local) = self.sigma_t_at(p, &point, d)?;
+        stats.tentative_collisions += 1;
+        Ok((sigma_t, point, local))
+    }
+
+    /// What the next segment needs to know of `seg`: empty (no tentative collision, nothing
+    /// below the top), shortened, or neither.
+    fn previous(&self, seg: &Segment, tentative: bool) -> Previous {
+        if !tentative && self.is_empty(seg) {
+            Previous::Empty(seg.bound.length)
+        } else if seg.shortened {
+            Previous::Shortened(seg.bound.length)
+        } else {
+            Previous::None
+        }
+    }
+
     /// True when the segment's majorant is zero throughout: it lies above the shell.
     fn is_empty(&self, seg: &Segment) -> bool {
         seg.s_up == 0.0 || seg.bound.f_lo[0].min(seg.bound.f_lo[1]) > seg.shape.top()
@@ -432,15 +454,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             while let Some(next) = self.next_tentative(&seg, s, rng) {
                 s = next;
                 tentative = true;
-                budget += 1;
-                if budget > MAX_TENTATIVE {
-                    return Err(too_many_tentative(origin, d));
-                }
-                let p = origin + (seg.t + s) * d;
-                let point = self.checked(self.surface.point_on_segment(p, &cache), p, stats)?;
-                let (sigma_t, local) = self.sigma_t_at(p, &point, d)?;
+                spend_tentative(&mut budget, origin, d)?;
+                let (sigma_t, point, local) = self.at_tentative(&seg, s, origin, d, &cache, stats)?;
                 let mu = self.majorant(&seg, s);
-                stats.tentative_collisions += 1;
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
                 }
@@ -448,16 +464,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     return Ok(TrackedFlight::Scatter { t: seg.t + s, point, local });
                 }
             }
-            previous = if !tentative && self.is_empty(&seg) {
-                Previous::Empty(seg.bound.length)
-            } else if seg.shortened {
-                Previous::Shortened(seg.bound.length)
-            } else {
-                Previous::None
-            };
+            previous = self.previous(&seg, tentative);
             (t, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
         }
-        Err(Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)")))
+        Err(too_many_segments())
     }
 
     /// An unbiased estimate of the transmittance along `origin + t d`, `t ∈ [0, t_max]`, by
@@ -497,20 +507,14 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             while let Some(next) = self.next_tentative(&seg, s, rng) {
                 s = next;
                 tentative = true;
-                budget += 1;
-                if budget > MAX_TENTATIVE {
-                    return Err(too_many_tentative(origin, d));
-                }
+                spend_tentative(&mut budget, origin, d)?;
                 let (mu, mu_c) = (self.majorant(&seg, s), self.control(&seg, s));
                 // Thinning: the residual's tentative collisions are those of μ kept with
                 // probability (μ − μ_c)/μ; the rest belong to the control, already integrated.
                 if !(rng.next_f64() * mu < mu - mu_c) {
                     continue;
                 }
-                let p = origin + (seg.t + s) * d;
-                let point = self.checked(self.surface.point_on_segment(p, &cache), p, stats)?;
-                let (sigma_t, _) = self.sigma_t_at(p, &point, d)?;
-                stats.tentative_collisions += 1;
+                let (sigma_t, _, _) = self.at_tentative(&seg, s, origin, d, &cache, stats)?;
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) || sigma_t < mu_c * (1.0 - VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
                 }
@@ -519,16 +523,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     return Ok(0.0);
                 }
             }
-            previous = if !tentative && self.is_empty(&seg) {
-                Previous::Empty(seg.bound.length)
-            } else if seg.shortened {
-                Previous::Shortened(seg.bound.length)
-            } else {
-                Previous::None
-            };
+            previous = self.previous(&seg, tentative);
             (t, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
         }
-        Err(Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)")))
+        Err(too_many_segments())
     }
 }
 
@@ -547,12 +545,21 @@ fn roulette(transmittance: &mut f64, rng: &mut Pcg32) -> bool {
     }
 }
 
-/// The error of a call that exceeded [`MAX_TENTATIVE`].
-fn too_many_tentative(origin: DVec3, d: DVec3) -> Error {
-    Error::new(
-        ErrorKind::InvalidArgument,
-        format!(
-            "tracking from {origin} along {d} needed more than {MAX_TENTATIVE} tentative collisions: the majorant is loose by many orders of magnitude (sigma far below the surface's size, or a deep start inside)"
-        ),
-    )
+/// Counts one tentative collision of a call against [`MAX_TENTATIVE`].
+fn spend_tentative(budget: &mut u64, origin: DVec3, d: DVec3) -> Result<()> {
+    *budget += 1;
+    if *budget > MAX_TENTATIVE {
+        return Err(Error::new(
+            ErrorKind::InvalidArgument,
+            format!(
+                "tracking from {origin} along {d} needed more than {MAX_TENTATIVE} tentative collisions: the majorant is loose by many orders of magnitude (sigma far below the surface's size, or a deep start inside)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The error of a call that took [`MAX_SEGMENTS`] segments.
+fn too_many_segments() -> Error {
+    Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)"))
 }

@@ -176,6 +176,12 @@ LibraryField::LibraryField(const MediumParamBag& bag, bool gpss) : gpss_(gpss) {
 
 const mf_field_callbacks& LibraryField::callbacks() const { return *callbacks_; }
 
+std::shared_ptr<const LibraryField> library_field_of(const MediumParamBag& bag) {
+    if (!bag.fields) return nullptr;
+    const ParamValue* distribution = bag.get("distribution");
+    return std::make_shared<LibraryField>(bag, !distribution || distribution->s == "gpss");
+}
+
 MediumParamBag base_bag(const MediumParamBag& bag) {
     if (!bag.fields) return bag;
     MediumParamBag base = stand_in_bag(bag);

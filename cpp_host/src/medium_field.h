@@ -66,6 +66,10 @@ private:
 /// `alpha`. The bag itself when nothing varies.
 MediumParamBag base_bag(const MediumParamBag& bag);
 
+/// The library field of a medium whose parameters vary (gpss unless `distribution` names a
+/// height field); null when none varies.
+std::shared_ptr<const LibraryField> library_field_of(const MediumParamBag& bag);
+
 /// A collision's local parameters in an event record (MediumInteraction::record, 14 doubles from
 /// `at`), and back: null when the medium's own parameters hold there.
 void store_local(const ::mf_local_params& local, MediumInteraction* mi, int at);

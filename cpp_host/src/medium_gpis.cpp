@@ -4,6 +4,7 @@
 #include <macrofacet.h>
 
 #include <cmath>
+#include <memory>
 #include <limits>
 
 #include "library_abi.h"
@@ -168,17 +169,9 @@ std::shared_ptr<GpisMedium> create_gpis_medium(const MediumParamBag& bag, std::s
     ParamsHandle params = bag_to_params(base);
     mf_gpis* handle = nullptr;
     if (mf_gpis_new(params.get(), &handle) != MF_OK) throw medium_param_error(base, mf_last_error());
-    std::shared_ptr<const LibraryField> field;
-    if (bag.fields) {
-        const ParamValue* distribution = bag.get("distribution");
-        try {
-            field = std::make_shared<LibraryField>(bag, !distribution || distribution->s == "gpss");
-        } catch (...) {
-            mf_gpis_free(handle);
-            throw;
-        }
-    }
-    return std::make_shared<GpisMedium>(handle, std::move(mean), medium_label(bag), std::move(field));
+    std::unique_ptr<mf_gpis, void (*)(mf_gpis*)> owned(handle, mf_gpis_free);  // freed if the field throws
+    std::shared_ptr<const LibraryField> field = library_field_of(bag);
+    return std::make_shared<GpisMedium>(owned.release(), std::move(mean), medium_label(bag), std::move(field));
 }
 
 }  // namespace mf

@@ -4,6 +4,7 @@
 #include <macrofacet.h>
 
 #include <cmath>
+#include <memory>
 #include <cstdio>
 
 #include "library_abi.h"
@@ -162,17 +163,9 @@ std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag&
     ParamsHandle params = bag_to_params(base);
     mf_medium* handle = nullptr;
     if (mf_medium_new(params.get(), &handle) != MF_OK) throw medium_param_error(base, mf_last_error());
-    std::shared_ptr<const LibraryField> field;
-    if (bag.fields) {
-        const ParamValue* distribution = bag.get("distribution");
-        try {
-            field = std::make_shared<LibraryField>(bag, !distribution || distribution->s == "gpss");
-        } catch (...) {
-            mf_medium_free(handle);
-            throw;
-        }
-    }
-    return std::make_shared<MacrofacetMedium>(handle, std::move(surface), medium_label(bag), std::move(field));
+    std::unique_ptr<mf_medium, void (*)(mf_medium*)> owned(handle, mf_medium_free);  // freed if the field throws
+    std::shared_ptr<const LibraryField> field = library_field_of(bag);
+    return std::make_shared<MacrofacetMedium>(owned.release(), std::move(surface), medium_label(bag), std::move(field));
 }
 
 }  // namespace mf

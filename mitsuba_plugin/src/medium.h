@@ -132,11 +132,8 @@ public:
             if (mf_medium_new(params.get(), &medium) != MF_OK) throw std::runtime_error(library_error());
             std::unique_ptr<mf_medium, MediumDeleter> owned(medium);
             VaryingField field;
-            if (bag.fields) {
-                const ::mf::ParamValue* distribution = bag.get("distribution");
-                field.fields = bag.fields;
-                field.library = std::make_shared<const ::mf::LibraryField>(bag, !distribution || distribution->s == "gpss");
-            }
+            field.fields = bag.fields;
+            field.library = ::mf::library_field_of(bag);
             double top = 0;
             check(mf_medium_shell_top(medium, &top), "mf_medium_shell_top");
             check_fields_on_surface(field.fields.get(), *surface, top);

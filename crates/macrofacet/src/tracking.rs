@@ -87,6 +87,14 @@ const MAX_SHORTENINGS: u32 = 4;
 /// `(σ_hi/σ_lo)²` is at most [`MAX_DENSITY_FACTOR`] or stops falling.
 const MAX_FIELD_SHORTENINGS: u32 = 6;
 const MAX_DENSITY_FACTOR: f64 = 1.5;
+/// A segment whose frame normals span more than this range of `d·n`, whose `S_up` exceeds
+/// [`LOOSE_AREA`] times the projected area at its start and which expects more than
+/// [`WIDE_RANGE_COLLISIONS`] tentative collisions is shortened to about that many (at most
+/// [`MAX_WIDE_SHORTENINGS`] times per segment).
+const WIDE_COS_RANGE: f64 = 0.5;
+const LOOSE_AREA: f64 = 4.0;
+const WIDE_RANGE_COLLISIONS: f64 = 8.0;
+const MAX_WIDE_SHORTENINGS: u32 = 2;
 /// Lipschitz steps above the shell per segment (each one surface query).
 const MAX_SKIPS: u32 = 64;
 /// Default reach of a segment, in σ of change of `f` (covers the shell from its top to deep
@@ -319,6 +327,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut length = self.segment_length(start, d, previous).min(remaining);
         let mut shortenings = 0;
         let (mut field_shortenings, mut last_factor) = (0, f64::INFINITY);
+        let mut wide_shortenings = 0;
         loop {
             stats.segments += 1;
             let mut bound = self.surface.bound(start, p, d, length, LOOSENESS_SIGMAS * sigma, cache)?;
@@ -361,12 +370,31 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 length = 0.5 * bound.length;
                 continue;
             }
-            let s_up = match params.alpha {
-                Some([_, hi]) => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi)).upper(bound.cos),
-                None => self.area.upper(bound.cos),
-            } * params.density_factor();
+            let area = match params.alpha {
+                Some([_, hi]) => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi)),
+                None => self.area,
+            };
+            let s_up = area.upper(bound.cos) * factor;
+            // A wide range of d·n (a segment through a sphere's centre, where d·n turns from −1
+            // to +1) puts grazing frames into S_up, up to ~α above the projected area where the
+            // segment starts: when that is loose and the segment expects many tentative
+            // collisions, shorten it to about WIDE_RANGE_COLLISIONS of them (found by fuzzing:
+            // GGX α = 1e6, σ = 1e50 around a sphere of radius 986 took 1.6e6 of them).
+            if bound.cos[1] - bound.cos[0] > WIDE_COS_RANGE && wide_shortenings < MAX_WIDE_SHORTENINGS && bound.length == length {
+                let c = d.dot(start.normal).clamp(-1.0, 1.0);
+                if s_up > LOOSE_AREA * area.upper([c, c]) * factor {
+                    let (f0, slope) = bound.lower_line();
+                    let expected = s_up * shape.density_integral(f0, slope, bound.length);
+                    if expected > WIDE_RANGE_COLLISIONS {
+                        wide_shortenings += 1;
+                        let keep = if expected.is_finite() { WIDE_RANGE_COLLISIONS / expected } else { 0.5 };
+                        length = (keep * bound.length).max(f64::MIN_POSITIVE);
+                        continue;
+                    }
+                }
+            }
             // The control's S_lo is only needed by transmittance; it sets it.
-            return Ok(Segment { t, bound, shape, s_up, s_lo: 0.0, params, shortened: shortenings > 0 });
+            return Ok(Segment { t, bound, shape, s_up, s_lo: 0.0, params, shortened: shortenings + wide_shortenings > 0 });
         }
     }
 

@@ -10,6 +10,9 @@
 //! Also checks the `#[repr(C)]` layouts against the numbers `tests/c/abi_test.c` asserts with
 //! `offsetof`, so that both sides of the boundary agree on them.
 
+mod common;
+
+use common::last_error;
 use glam::DVec3;
 use macrofacet_ffi::*;
 use macrofacet::frame::{check_direction, Frame};
@@ -723,13 +726,6 @@ fn ffi_gpis(floats: &[(&str, f64)], memory: &str) -> Result<*mut mf_gpis, (mf_st
         assert_eq!(gpis, sentinel, "out_gpis written on failure");
         Err((status, last_error()))
     }
-}
-
-fn last_error() -> String {
-    let mut buf = [0u8; 1024];
-    let mut len = 0usize;
-    assert_eq!(unsafe { mf_last_error_message(buf.as_mut_ptr().cast(), buf.len(), &mut len) }, mf_status::MF_OK);
-    String::from_utf8_lossy(&buf[..len.min(buf.len() - 1)]).into_owned()
 }
 
 fn ffi_trace(

@@ -86,6 +86,23 @@ fn gtr_lambda_near_the_normal_is_not_nan() {
     unsafe { mf_ndf_free(n) };
 }
 
+/// `fuzz/artifacts/ndf/crash-bd026eae994a6584250bd97cbb4461017675fd83` (found once the fuzz
+/// target stopped skipping the case above): GTR γ = 3, α = 1000.0000000010001, frame normal
+/// (-3.1e-97, -5.2e-99, 6.55), so `w = +z` lies 4.8e-98 rad off it (μ = cot θ = 2.1e97, below the
+/// 1e100 where the excess is skipped): `mf_ndf_lambda` answered −∞ with MF_OK, from `μ³ a2²`
+/// overflowing inside GTR_4's excess. Near the normal Λ(w) = 0 and Λ(−w) = −1.
+#[test]
+fn gtr_lambda_near_the_normal_is_finite() {
+    let n = ndf(&[("gamma", 3.0), ("alpha", 1.0000000000010001e3)], &[("distribution", "gtr")]);
+    let frame = mf_frame { normal: mf_vec3 { x: -3.1367874596608137e-97, y: -5.1777413071657925e-99, z: 6.54887483179553 }, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 } };
+    for (w, expected) in [(1.0, 0.0), (-1.0, -1.0)] {
+        let mut lambda = -7.0;
+        assert_eq!(unsafe { mf_ndf_lambda(n, &frame, mf_vec3 { x: 0.0, y: 0.0, z: w }, &mut lambda) }, mf_status::MF_OK);
+        assert!((lambda - expected).abs() <= 1e-12, "w = {w}: Λ = {lambda}, expected {expected}");
+    }
+    unsafe { mf_ndf_free(n) };
+}
+
 /// `fuzz/artifacts/ndf/crash-45e43ad95b1c47e52c48f8e688b6b46fd9b19cb5`: GTR γ = 2.2902,
 /// α = 1.0003e-4, stretch 0.9843, frame normal (-3, 4.17e62, 1e6) (≈ +y), `wi = -y` (below the
 /// surface), u = (0.99216, 0.10436, 0.57256): `mf_ndf_sample_visible` returns a valid sample with

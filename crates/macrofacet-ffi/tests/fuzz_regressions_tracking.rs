@@ -1,6 +1,9 @@
 //! Regression tests for what the `tracking`, `fields` and `ndf` fuzz targets found (issue 9,
 //! `fuzz/fuzz_targets/`): each one the exact case of a crash artifact, reduced.
 
+mod common;
+
+use common::last_error;
 use macrofacet_ffi::*;
 use std::ptr;
 
@@ -123,6 +126,37 @@ fn mesh_without_area_is_refused_or_has_unit_normals() {
         }
         unsafe { mf_surface_free(surface) };
     }
+}
+
+/// `fuzz/artifacts/fields/crash-c049bbc5d791283fe3bffedcb0ad4bee0a9cca62`: a sphere of radius
+/// 5.69 centred 4e-163 above the origin, `mf_surface_eval` at the origin: the normal had length
+/// 0.9999955 (|p − c|² underflows). And `fuzz/artifacts/tracking/crash-fc4b700986975a649f7809731b004679d4581201`:
+/// a mesh 2.9e-320 wide (one triangle, welded closed) overflowed the acceleration grid's cell
+/// count (a panic, MF_ERROR_INTERNAL); meshes narrower than the σ range are refused.
+#[test]
+fn tiny_offsets_and_tiny_meshes() {
+    let mut sphere = ptr::null_mut();
+    let center = mf_vec3 { x: 0.0, y: 0.0, z: 3.984366405781637e-163 };
+    let pole = mf_vec3 { x: 0.0, y: 0.0, z: 1.0 };
+    assert_eq!(unsafe { mf_surface_new_sphere(center, 5.688840528388324, false, pole, &mut sphere) }, mf_status::MF_OK);
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+    assert_eq!(unsafe { mf_surface_eval(sphere, ptr::null_mut(), zero, &mut point) }, mf_status::MF_OK);
+    let n = point.normal;
+    assert!(((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() <= 1e-15, "{point:?}");
+    assert_eq!((n.x, n.y, n.z), (0.0, 0.0, -1.0), "{point:?}");
+    unsafe { mf_surface_free(sphere) };
+
+    let positions = [0.0, 2.884e-320, 0.0, 0.0, 2.884e-320, 0.0, 0.0, 0.0, 2.884e-320];
+    let normals = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
+    let uvs = [0.0; 6];
+    let indices = [0u32, 1, 2];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 3, indices: indices.as_ptr(), triangle_count: 1, normals: normals.as_ptr(), uvs: uvs.as_ptr() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_ERROR_INVALID_ARGUMENT);
+    assert!(surface.is_null());
+    let message = last_error();
+    assert!(message.contains("smallest length"), "{message}");
 }
 
 /// `fuzz/artifacts/tracking/crash-f608ee00e91797708ef8fd1375c9fa83fb734e0d`: far from a

@@ -55,7 +55,7 @@ impl Frame {
 /// its direction unchanged. Normalising then squares numbers near 1: `|v|²` of a vector as short
 /// as 1e-159 is subnormal (a normal of length 1e-159 gave world directions of length 0.999999,
 /// issue 9 item 5) and that of a vector longer than 1e154 overflows.
-fn rescaled(v: DVec3) -> DVec3 {
+pub(crate) fn rescaled(v: DVec3) -> DVec3 {
     let largest = v.abs().max_element();
     if largest == 0.0 || !largest.is_finite() {
         return v;

@@ -36,14 +36,16 @@ pub(super) fn ggx_excess(beta2: f64, mu: f64) -> f64 {
 }
 
 /// `e(μ) = μ/S_4(μ) − μ` of GTR_4 with roughness² `a2` (seeds/001 Eq. 39), with
-/// `μ³ − B³ = −a2 (μ² + μB + B²)/(μ + B)` so that nothing cancels for small `a2`.
+/// `μ³ − B³ = −a2 (μ² + μB + B²)/(μ + B)` so that nothing cancels for small `a2`, and every
+/// term divided by `B³` (with `r = μ/B`) so that nothing overflows: `μ³ a2²` did at μ = 2e97,
+/// α = 1e3 (Λ = −∞ near the normal, found by fuzzing).
 pub(super) fn gtr4_excess(a2: f64, mu: f64) -> f64 {
     let big_a = 8.0 * (a2 * a2 + a2 + 1.0);
     let b = (mu * mu + a2).sqrt();
-    let b3 = b * b * b;
-    let head = -big_a * mu * a2 * (mu * mu + mu * b + b * b) / (mu + b);
-    let tail = 3.0 * a2 * (a2 * (5.0 * a2 * a2 + 2.0 * a2 + 1.0) + 4.0 * mu * mu * (2.0 * a2 * a2 + a2 + 1.0));
-    (head + tail) / (2.0 * big_a * b3)
+    let r = mu / b;
+    let head = -a2 * r * (r * r + r + 1.0) / (r + 1.0);
+    let tail = 3.0 * a2 / big_a * (a2 * (5.0 * a2 * a2 + 2.0 * a2 + 1.0) / (b * b) + 4.0 * r * r * (2.0 * a2 * a2 + a2 + 1.0));
+    (head + tail) / (2.0 * b)
 }
 
 /// The exact projected area as a Gauss–Jacobi mixture of closed forms (module notes).

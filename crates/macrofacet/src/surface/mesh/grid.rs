@@ -39,10 +39,16 @@ impl CellGrid {
     /// The grid over the mesh's bounds (`min`, `max`) with cells of about `cell`.
     pub fn build(bvh: &Bvh, triangles: &[Triangle], min: DVec3, max: DVec3, cell: f64) -> CellGrid {
         let extent = max - min;
-        let h = cell.max((extent.x * extent.y * extent.z / MAX_CELLS).cbrt()).max(1e-12 * extent.max_element());
+        let mut h = cell.max((extent.x * extent.y * extent.z / MAX_CELLS).cbrt()).max(1e-12 * extent.max_element());
+        // Blocks per axis with the band's padding; a flat mesh (no volume) of small triangles
+        // would otherwise get ~1e12 cells per axis: grow the cells until the count is bounded.
+        let blocks_of = |h: f64| ((extent + 2.0 * (BAND_CELLS + 1.0) * h) / (h * BLOCK as f64)).ceil().max(DVec3::ONE);
+        while blocks_of(h).element_product() * f64::from(BLOCK.pow(3)) > 4.0 * MAX_CELLS {
+            h *= 1.25;
+        }
         let band = BAND_CELLS * h;
         let origin = min - DVec3::splat(band + h);
-        let dims = (((max - min) + 2.0 * (band + h)) / (h * BLOCK as f64)).ceil().as_ivec3().max(IVec3::ONE) * BLOCK;
+        let dims = blocks_of(h).as_ivec3() * BLOCK;
         let count = (dims.x as usize) * (dims.y as usize) * (dims.z as usize);
         let half_diagonal = 0.5 * 3f64.sqrt() * h;
         let mut lists_of: Vec<Vec<u32>> = vec![Vec::new(); count];

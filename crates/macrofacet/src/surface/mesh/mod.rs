@@ -110,6 +110,13 @@ impl TriangleMesh {
         if let Some((t, tri)) = indices.iter().enumerate().find(|(_, tri)| tri.iter().any(|&v| v as usize >= positions.len())) {
             return Err(invalid(format!("triangle {t} refers to vertex {:?} of {}", tri, positions.len())));
         }
+        // Below the sigma range the grid's cells and the rounding scale underflow (found by
+        // fuzzing: a mesh 2.9e-320 wide overflowed the grid's cell count).
+        let (lo, hi) = indices.iter().flatten().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| (lo.min(positions[v as usize]), hi.max(positions[v as usize])));
+        let (extent, smallest) = ((hi - lo).max_element(), crate::limits::SIGMA_RANGE.0);
+        if !(extent >= smallest) {
+            return Err(invalid(format!("the mesh spans {extent:e}, below the smallest length the library supports ({smallest:e})")));
+        }
 
         // Weld vertices by exact position so that meshes split by normals or uvs still get the
         // pseudo-normals of their shared corners and edges.

@@ -262,8 +262,10 @@ impl FieldHost {
 
     fn lerp(range: [f64; 2], w: f64) -> f64 {
         // The ends may come in either order (a range derived from fuzz bytes).
+        // (A NaN end, which `positive` may draw, gives NaN: the library must refuse it.)
         let (lo, hi) = (range[0].min(range[1]), range[0].max(range[1]));
-        (range[0] + (range[1] - range[0]) * w).clamp(lo, hi)
+        let value = range[0] + (range[1] - range[0]) * w;
+        if lo <= hi { value.clamp(lo, hi) } else { value }
     }
 
     /// The parameters at `p`: every value inside its range.

@@ -691,6 +691,28 @@ fn sphere_grid(n: usize, radius_object: f64) -> (macrofacet::surface::GridSurfac
 }
 
 #[test]
+fn sdf_grid_bound_of_a_segment_far_beyond_the_grid() {
+    // fuzz/artifacts/tracking/crash-f4fba2b466b986a109931cb066f2682c2877f9cc: σ = 1e50 makes
+    // segments 1e50 long, whose grid coordinates overflowed i32 in `lipschitz_along` (a panic;
+    // wrapped, no cell would have been bounded). The bound must still hold at the far end.
+    let (grid, _, _) = sphere_grid(8, 0.3);
+    let p = DVec3::new(1e-16, 1e-16, 0.5);
+    let d = DVec3::new(2.1073424255447017e-8, 0.0, -1.0).normalize();
+    let start = grid.point(p).unwrap();
+    // A longer segment from the same start crosses every cell a shorter one does.
+    let slope = |length: f64| grid.bound(&start, p, d, length, 1.0, &mut ()).unwrap().upper_line().1;
+    let leaving = slope(10.0);
+    for length in [1.0, 1e10, 1e50, 1e100] {
+        let bound = grid.bound(&start, p, d, length, 1.0, &mut ()).unwrap();
+        let end = grid.point(p + bound.length * d).unwrap();
+        let (lo, hi) = (bound.lower_line(), bound.upper_line());
+        let at_end = |(v, k): (f64, f64)| v + k * bound.length;
+        assert!(at_end(lo) <= end.f && end.f <= at_end(hi), "length {length}: f = {} outside [{}, {}]", end.f, at_end(lo), at_end(hi));
+        assert!(length < 10.0 || hi.1 >= leaving, "length {length}: slope {} below the {leaving} of a shorter segment", hi.1);
+    }
+}
+
+#[test]
 fn sdf_grid_surface_interpolates_bounds_and_tracks() {
     // Issue 12: a mean surface from an SDF grid. The trilinear interpolant of a sphere's distance
     // is within O(h²) of it and exact at the samples; segment bounds hold inside and beyond the

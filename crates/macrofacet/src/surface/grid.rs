@@ -144,8 +144,15 @@ impl GridSurface {
     fn lipschitz_along(&self, p: DVec3, d: DVec3, length: f64) -> f64 {
         let (a, b) = (self.to_grid(p), self.to_grid(p + length * d));
         let cells = self.dims - IVec3::ONE;
-        let lo = (a.min(b).floor().as_ivec3() - IVec3::ONE).clamp(IVec3::ZERO, cells - IVec3::ONE);
-        let hi = (a.max(b).floor().as_ivec3() + IVec3::ONE).clamp(IVec3::ZERO, cells - IVec3::ONE);
+        // Clamped before the conversion to integers: a segment 1e50 long reaches grid
+        // coordinates beyond i32 (found by fuzzing: the saturated i32::MIN − 1 overflowed; wrapped,
+        // it would have bounded no cell). A non-finite end takes every cell.
+        let last = (cells - IVec3::ONE).as_dvec3();
+        let (lo, hi) = if a.is_finite() && b.is_finite() {
+            ((a.min(b).floor() - 1.0).clamp(DVec3::ZERO, last).as_ivec3(), (a.max(b).floor() + 1.0).clamp(DVec3::ZERO, last).as_ivec3())
+        } else {
+            (IVec3::ZERO, last.as_ivec3())
+        };
         let top = (self.dims - IVec3::ONE).as_dvec3();
         let inside = |g: DVec3| g.cmpge(DVec3::ZERO).all() && g.cmple(top).all();
         let mut largest: f32 = 0.0;

@@ -176,8 +176,11 @@ impl Scene<'_> {
     /// region (the enclosure is conservative: its vertices are corners of cells without region).
     pub fn enclosure(&mut self, b: &mut Bytes, level: f64) {
         let s = self.surface.0 as *const mf_surface;
-        let cell = match b.u8() % 8 {
-            0 => b.choose(&[f64::NAN, -1.0, f64::INFINITY, 0.0]),
+        // The default cell (0: 1/128 of the extent, ~65 ms for a torus) is drawn rarely: at one
+        // input in 32 it took 60 % of the target's time.
+        let cell = match b.u8() {
+            0 => 0.0,
+            1..=31 => b.choose(&[f64::NAN, -1.0, f64::INFINITY]),
             _ => self.size * b.log_uniform(-0.7, 0.5),
         };
         let level = if b.u8() % 8 == 0 { b.float() } else { level };

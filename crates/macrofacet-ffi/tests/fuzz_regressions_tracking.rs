@@ -312,3 +312,65 @@ fn free_flight_from_deep_inside_a_thin_medium_ends() {
         mf_medium_free(m);
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-5fbb2376c5aedc8642244a121e9091e4e9b4b8a1`: the enclosure of
+/// a tetrahedron 2000 wide at the level 1e47 (σ = 1e50) had a vertex inside the region, because
+/// `f` at that vertex, 1.5e47 away, came out negative: that far, every feature of the mesh is at
+/// the same rounded distance and the pseudo-normal test picks a face facing away. Outside the
+/// mesh's bounding box `f` is now positive.
+#[test]
+fn mesh_far_away_is_outside() {
+    let a = 1000.0000000010001;
+    let positions = [a, a, a, a, -a, -a, -a, a, -a, -a, -a, a];
+    let indices = [0u32, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    for p in [mf_vec3 { x: -1.0316227766019487e47, y: -1.0316227766019487e47, z: 1.1928851295354665e45 }, mf_vec3 { x: 1e20, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: -3e30, z: 2e30 }] {
+        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) }, mf_status::MF_OK);
+        assert!(point.f > 0.0, "f({p:?}) = {}", point.f);
+    }
+    unsafe { mf_surface_free(surface) };
+}
+
+/// A convex callback sphere of radius 1 whose answers carry an infinite tangent from the second
+/// call on (counted in `user_data`).
+unsafe extern "C" fn sphere_with_bad_tangent(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let calls = unsafe { &mut *(user_data as *mut u64) };
+    *calls += 1;
+    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let tangent = if *calls >= 2 { f64::INFINITY } else { 0.0 };
+    unsafe { *out = mf_surface_point { f: r - 1.0, normal: mf_vec3 { x: p.x / r, y: p.y / r, z: p.z / r }, tangent: mf_vec3 { x: tangent, y: 1.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/fields/crash-b83316f9192f94465db3bfcaae8373caa0a90f88`: a convex callback
+/// surface answers the end of a segment bound with an infinite tangent; the tracker used that end
+/// point unchecked and went on for 6 callback calls (the rule is an error within 4 of a visible
+/// lie). The end point is now checked with the bound.
+#[test]
+fn segment_end_from_a_callback_is_checked() {
+    let m = medium(&[("sigma", 0.01), ("alpha", 0.3)], &[("distribution", "beckmann")]);
+    let callbacks = mf_surface_callbacks {
+        point: Some(sphere_with_bad_tangent),
+        bound: None,
+        shape: MF_SURFACE_CONVEX,
+        bounds_min: mf_vec3 { x: -1.0, y: -1.0, z: -1.0 },
+        bounds_max: mf_vec3 { x: 1.0, y: 1.0, z: 1.0 },
+    };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 1.02 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 1 };
+    let mut calls = 0u64;
+    let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+    let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), &mut calls as *mut u64 as *mut std::ffi::c_void, &q, c.as_mut_ptr()) };
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT);
+    assert!(calls <= 2, "{calls} callback calls");
+    assert!(last_error().contains("tangent"), "{}", last_error());
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}

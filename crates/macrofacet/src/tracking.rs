@@ -332,6 +332,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             stats.segments += 1;
             let mut bound = self.surface.bound(start, p, d, length, LOOSENESS_SIGMAS * sigma, cache)?;
             bound.validate(length, start.f, "the mean surface")?;
+            // The end point is used before the segment ends (found by fuzzing: a convex callback
+            // surface's end with an infinite tangent went on for 6 callback calls).
+            if let Some(end) = bound.end {
+                end.validated(p + bound.length * d)?;
+            }
             // A side without a bound gets the Lipschitz bound every signed distance has.
             let lipschitz = SegmentBound::lipschitz(start.f, bound.length);
             if bound.f_lo.iter().any(|v| v.is_infinite()) {

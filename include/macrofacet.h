@@ -1068,7 +1068,9 @@ enum mf_status mf_surface_new_sphere(struct mf_vec3 center,
 
 /**
  * Creates a triangle-mesh surface (exact signed distance, see [`mf_mesh`]). The arrays are
- * copied; the caller may free them after the call.
+ * copied; the caller may free them after the call. Refused with the reason: a mesh that is not
+ * closed, non-finite or out-of-range data, vertices beyond ±1e50, or a mesh narrower than 1e-50
+ * (lengths outside the range of `sigma`).
  *
  * # Safety
  * `mesh` must be NULL or valid, its arrays valid for the sizes it states.

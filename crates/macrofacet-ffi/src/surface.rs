@@ -275,7 +275,9 @@ pub unsafe extern "C" fn mf_surface_new_sphere(center: mf_vec3, radius: f64, fli
 }
 
 /// Creates a triangle-mesh surface (exact signed distance, see [`mf_mesh`]). The arrays are
-/// copied; the caller may free them after the call.
+/// copied; the caller may free them after the call. Refused with the reason: a mesh that is not
+/// closed, non-finite or out-of-range data, vertices beyond ±1e50, or a mesh narrower than 1e-50
+/// (lengths outside the range of `sigma`).
 ///
 /// # Safety
 /// `mesh` must be NULL or valid, its arrays valid for the sizes it states.

@@ -253,7 +253,8 @@ fn rough_medium_around_a_sphere_has_a_bounded_cost() {
     let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
     let status = unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) };
     assert_eq!(status, mf_status::MF_OK);
-    assert_eq!(t.transmittance, 1.0, "{t:?}");
+    // (The optical depth is ~2e-50; one ratio-tracking estimate lies within 1e-6 of it.)
+    assert!(t.transmittance <= 1.0 && t.transmittance > 1.0 - 1e-6, "{t:?}");
     // 11 surface queries and 7 tentative collisions since the fix (1.6e6 before).
     assert!(t.stats.surface_queries <= 100, "{t:?}");
     unsafe {
@@ -373,4 +374,85 @@ fn segment_end_from_a_callback_is_checked() {
         mf_surface_free(surface);
         mf_medium_free(m);
     }
+}
+
+/// The plane `n·p − offset` of `fuzz/artifacts/tracking/crash-9100370be8f595f2f2f94225b606f58d0e23535b`.
+const PLANE_NORMAL: [f64; 3] = [0.12471758887363776, -0.0030571111562215543, 0.9921875715291564];
+const PLANE_OFFSET: f64 = -1.7362059233297435e-45;
+
+unsafe extern "C" fn tilted_plane(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let [x, y, z] = PLANE_NORMAL;
+    unsafe { *out = mf_surface_point { f: x * p.x + y * p.y + z * p.z - PLANE_OFFSET, normal: mf_vec3 { x, y, z }, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/tracking/crash-9100370be8f595f2f2f94225b606f58d0e23535b`: σ = 1e-50, GGX
+/// α = 1e6, an honest plane (a concave callback), a ray 100 σ above it descending at d·n = −1e-8:
+/// the tentative collisions lie 1e-40 along the ray, where rounding the coordinates moves f by
+/// 1e-6 σ, and the plane's exact majorant was exceeded (1 violation in 92). The bounds of `f` now
+/// include the rounding of the positions. Farther along the ray the rounding exceeds σ: there a
+/// call may end with the tentative cap's error, naming the cause, but never answers MF_OK with a
+/// broken majorant.
+#[test]
+fn plane_majorant_holds_at_rounded_positions() {
+    let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730953e-56)], &[("distribution", "ggx")]);
+    let callbacks = mf_surface_callbacks {
+        point: Some(tilted_plane),
+        bound: None,
+        shape: MF_SURFACE_CONCAVE,
+        bounds_min: mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY },
+        bounds_max: mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: f64::INFINITY },
+    };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let origin = mf_vec3 { x: 2.917864118616786e-48, y: 7.315226577307254e-49, z: 6.7081289745737284e-49 };
+    let d = mf_vec3 { x: 0.00019138411119676342, y: 0.9999953087410786, z: 0.003057101234345839 };
+    let (mut violations, mut answered, mut refused) = (0, 0, 0);
+    let mut tally = |status: mf_status, stats: Option<mf_track_stats>, seed: u64| {
+        if status == mf_status::MF_OK {
+            answered += 1;
+            violations += stats.expect("stats of an answer").majorant_violations;
+        } else {
+            assert!(last_error().contains("rounding of the coordinates"), "seed {seed}: {}", last_error());
+            refused += 1;
+        }
+    };
+    for seed in (0..40).chain([8361610016553369471]) {
+        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
+        tally(status, (status == mf_status::MF_OK).then(|| unsafe { c.assume_init() }.stats), seed);
+        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+        let status = unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) };
+        tally(status, Some(t.stats), seed);
+    }
+    assert_eq!(violations, 0, "majorant violations over 41 seeds ({answered} answered, {refused} refused)");
+    assert!(answered > 0, "{refused} refused");
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}
+
+/// `fuzz/artifacts/fields/crash-1db97a14de404eb89d75bb528ad4094abe4dff09`: a degenerate mesh
+/// 3e49 wide evaluated 1e300 away: every product of the closest-point test overflowed, no
+/// triangle was found and the lookup of "none" panicked (MF_ERROR_INTERNAL). Far points now get
+/// f = +inf and a unit normal.
+#[test]
+fn mesh_evaluated_beyond_overflow() {
+    let s = 3.0193516770859723e49;
+    let positions = [0.0, s, 0.0, 0.0, s, 0.0, 0.0, 0.0, s];
+    let indices = [0u32, 1, 2];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 3, indices: indices.as_ptr(), triangle_count: 1, normals: ptr::null(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    for p in [mf_vec3 { x: 1e300, y: 1e300, z: 1e300 }, mf_vec3 { x: -1e300, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: -1e308, z: 1e308 }] {
+        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+        let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };
+        assert_eq!(status, mf_status::MF_OK, "{p:?}: {}", last_error());
+        let n = point.normal;
+        assert!(point.f > 0.0 && ((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() < 1e-12, "{p:?}: {point:?}");
+    }
+    unsafe { mf_surface_free(surface) };
 }

@@ -95,6 +95,9 @@ const WIDE_COS_RANGE: f64 = 0.5;
 const LOOSE_AREA: f64 = 4.0;
 const WIDE_RANGE_COLLISIONS: f64 = 8.0;
 const MAX_WIDE_SHORTENINGS: u32 = 2;
+/// Ulps of the coordinates by which the bounds of `f` are widened (the rounding of the points
+/// where the surface is queried, with `|∇f| <= 1`).
+const POSITION_ROUNDING: f64 = 4.0 * f64::EPSILON;
 /// Lipschitz steps above the shell per segment (each one surface query).
 const MAX_SKIPS: u32 = 64;
 /// Default reach of a segment, in σ of change of `f` (covers the shell from its top to deep
@@ -345,6 +348,15 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             if bound.f_hi.iter().any(|v| v.is_infinite()) {
                 bound.f_hi = lipschitz.f_hi;
             }
+            // The surface is queried at rounded points `origin + t d`: f there may differ from
+            // the line through the ends by the rounding of the coordinates, at most linear in
+            // between since |q|∞ is convex (found by fuzzing: σ = 1e-50 at |p| ~ 1e-37 broke a
+            // plane's exact majorant).
+            let rounding = [p, p + bound.length * d].map(|q| POSITION_ROUNDING * q.abs().max_element());
+            if rounding.iter().all(|r| r.is_finite()) {
+                bound.f_lo = [bound.f_lo[0] - rounding[0], bound.f_lo[1] - rounding[1]];
+                bound.f_hi = [bound.f_hi[0] + rounding[0], bound.f_hi[1] + rounding[1]];
+            }
             // How far below f the lower bound falls at the ends (what costs tentative collisions),
             // against the end point's f when the surface gave it, else the upper bound.
             let f_end = bound.end.map_or(bound.f_hi[1], |e| e.f);
@@ -585,7 +597,7 @@ fn spend_tentative(budget: &mut u64, origin: DVec3, d: DVec3) -> Result<()> {
         return Err(Error::new(
             ErrorKind::InvalidArgument,
             format!(
-                "tracking from {origin} along {d} needed more than {MAX_TENTATIVE} tentative collisions: the majorant is loose by many orders of magnitude (sigma far below the surface's size, or a deep start inside)"
+                "tracking from {origin} along {d} needed more than {MAX_TENTATIVE} tentative collisions: the majorant is loose by many orders of magnitude (sigma far below the surface's size or the rounding of the coordinates, or a deep start inside)"
             ),
         ));
     }

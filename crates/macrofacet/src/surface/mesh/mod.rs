@@ -29,7 +29,8 @@ use region::FaceRegion;
 use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, Tangent};
 use smallvec::SmallVec;
 use std::collections::HashMap;
-use triangle::{closest_among, closest_on_triangle, Closest, Feature, Triangle};
+use triangle::{closer, closest_among, closest_on_triangle, Closest, Feature, Triangle};
+use crate::frame::rescaled;
 
 /// Per-candidate values of a segment bound, on the stack.
 type Few<T> = SmallVec<[T; MAX_CANDIDATES]>;
@@ -245,12 +246,31 @@ impl TriangleMesh {
         }
         let Some(list) = self.grid.list_at(p) else {
             let seed = hint.map_or(Closest::NONE, |i| closest_on_triangle(&self.triangles[i as usize], p, i));
-            return self.bvh.closest(&self.triangles, p, seed);
+            let found = self.bvh.closest(&self.triangles, p, seed);
+            return if found.triangle == Closest::NONE.triangle { self.closest_far(p) } else { found };
         };
         if let Some(&i) = list.iter().find(|&&i| certified(i)) {
             return closest_on_triangle(&self.triangles[i as usize], p, i);
         }
         closest_among(&self.triangles, p, list, Closest::NONE)
+    }
+
+    /// The closest point to a `p` so far away that the products of the closest-point test
+    /// overflow (every distance NaN; found by fuzzing: 1e300 from a mesh 3e49 wide gave no
+    /// triangle, a panic): the test in coordinates scaled by a power of two, over every triangle,
+    /// the distance then scaled back (`+∞` when it overflows).
+    fn closest_far(&self, p: DVec3) -> Closest {
+        let largest = p.abs().max_element().max(self.bounds.min.abs().max_element()).max(self.bounds.max.abs().max_element());
+        let scale = 2f64.powi(-(largest.log2().ceil() as i32).clamp(-1022, 1023));
+        let mut best = Closest::NONE;
+        for (i, t) in self.triangles.iter().enumerate() {
+            let scaled = Triangle { p: t.p.map(|v| v * scale), ..t.clone() };
+            let c = closest_on_triangle(&scaled, p * scale, i as u32);
+            if closer(&c, &best) {
+                best = c;
+            }
+        }
+        Closest { point: best.point / scale, distance_sq: best.distance_sq / (scale * scale), ..best }
     }
 
     /// The triangle recorded in `cache` as closest to a point of the current ray.
@@ -277,7 +297,7 @@ impl TriangleMesh {
             (Some(ns), _) => (c.barycentric.x * ns[0] + c.barycentric.y * ns[1] + c.barycentric.z * ns[2]).try_normalize().unwrap_or(pseudo),
             // ∇(±|p − c|) over a face is its normal on both sides, exactly.
             (None, Feature::Face) => tri.n,
-            (None, _) if distance > self.epsilon => sign * offset / distance,
+            (None, _) if distance > self.epsilon => if distance.is_finite() { sign * offset / distance } else { sign * rescaled(offset).normalize() },
             (None, _) => pseudo,
         };
         // Mitsuba's uv: the texture coordinates interpolated at the closest point, else the

@@ -456,3 +456,39 @@ fn mesh_evaluated_beyond_overflow() {
     }
     unsafe { mf_surface_free(surface) };
 }
+
+/// A plane `z = 0` whose normal comes back 1.00005 long (hosts compute in f32; the tracker takes
+/// normals within 1e-4 of unit).
+unsafe extern "C" fn long_normal_plane(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    unsafe { *out = mf_surface_point { f: p.z, normal: mf_vec3 { x: 0.0, y: 0.0, z: 1.00005 }, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/tracking/crash-eaebd8d9f76ceea0c4ed99fc8f11113526121388`: a host normal
+/// 1.00005 long is accepted, and the collision's frame handed it back as it came; the frame of
+/// a collision is now unit. (With such a normal along the ray, a convex surface's bound also
+/// came out as the unordered cosine range [-1, -1.00005], an error; it is clamped, then ordered.)
+#[test]
+fn collision_frame_is_unit() {
+    let m = medium(&[("sigma", 0.01), ("alpha", 0.3)], &[("distribution", "beckmann")]);
+    let callbacks = mf_surface_callbacks {
+        point: Some(long_normal_plane),
+        bound: None,
+        shape: MF_SURFACE_CONVEX,
+        bounds_min: mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY },
+        bounds_max: mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: 0.0 },
+    };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.05 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 3 };
+    let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+    assert_eq!(unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
+    let c = unsafe { c.assume_init() };
+    assert!(c.scattered, "{c:?}");
+    let n = c.frame.normal;
+    assert!(((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() <= 1e-15, "{c:?}");
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}

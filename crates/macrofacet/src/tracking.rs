@@ -66,7 +66,7 @@ impl TrackStats {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TrackedFlight {
     /// A real collision at distance `t`, where the surface is `point` (its frame is the local
-    /// frame of the phase function there).
+    /// frame of the phase function there; its normal unit).
     Scatter { t: f64, point: SurfacePoint, local: LocalParams },
     /// No collision in `[0, t_max]`.
     Pass,
@@ -506,6 +506,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     stats.majorant_violations += 1;
                 }
                 if rng.next_f64() * mu < sigma_t {
+                    // A host's normal is taken within 1e-4 of unit length; the collision's
+                    // frame is unit (found by fuzzing: length 1.00005 came back).
+                    let point = SurfacePoint { normal: point.normal.normalize(), ..point };
                     return Ok(TrackedFlight::Scatter { t: seg.t + s, point, local });
                 }
             }

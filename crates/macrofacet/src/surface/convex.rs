@@ -28,7 +28,9 @@ pub fn convex_bound(start: &SurfacePoint, end: &SurfacePoint, d: DVec3, length: 
         Curvature::Convex => (tangent, chord, [c0, c1]),
         Curvature::Concave => (chord, tangent, [c1, c0]),
     };
-    // Rounding can leave the derivative range a hair out of order for a straight segment.
-    let cos = [cos[0].min(cos[1]).max(-1.0), cos[0].max(cos[1]).min(1.0)];
+    // Rounding can leave the derivative range a hair out of order for a straight segment, and a
+    // host's normal (within 1e-4 of unit length) a hair outside [-1, 1]: clamped, then ordered.
+    let cos = cos.map(|c| c.clamp(-1.0, 1.0));
+    let cos = [cos[0].min(cos[1]), cos[0].max(cos[1])];
     SegmentBound { length, f_lo, f_hi, cos, end: Some(*end) }
 }

@@ -70,15 +70,7 @@ unsafe extern "C" fn long_normal_point(_: *mut std::ffi::c_void, p: mf_vec3, out
 #[test]
 fn surface_eval_and_enclosure_refuse_what_tracking_refuses() {
     for (name, point) in [("NaN f", nan_point as unsafe extern "C" fn(_, _, _) -> _), ("normal of length 2", long_normal_point)] {
-        let callbacks = mf_surface_callbacks {
-            point: Some(point),
-            bound: None,
-            shape: MF_SURFACE_GENERAL,
-            bounds_min: mf_vec3 { x: -1.0, y: -1.0, z: -1.0 },
-            bounds_max: mf_vec3 { x: 1.0, y: 1.0, z: 1.0 },
-        };
-        let mut surface = ptr::null_mut();
-        assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+        let surface = callback_surface(point, MF_SURFACE_GENERAL, mf_vec3 { x: -1.0, y: -1.0, z: -1.0 }, mf_vec3 { x: 1.0, y: 1.0, z: 1.0 });
         let sentinel = mf_vec3 { x: -7.0, y: -7.0, z: -7.0 };
         let mut out = mf_surface_point { f: -7.0, normal: sentinel, tangent: sentinel, u: -7.0, v: -7.0 };
         let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: 0.5, y: 0.25, z: 2.0 }, &mut out) };
@@ -294,15 +286,7 @@ unsafe extern "C" fn counted_sphere(user_data: *mut std::ffi::c_void, p: mf_vec3
 #[test]
 fn free_flight_from_deep_inside_a_thin_medium_ends() {
     let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730952e-44)], &[("distribution", "ggx")]);
-    let callbacks = mf_surface_callbacks {
-        point: Some(counted_sphere),
-        bound: None,
-        shape: MF_SURFACE_CONVEX,
-        bounds_min: mf_vec3 { x: -RADIUS, y: -RADIUS, z: -RADIUS },
-        bounds_max: mf_vec3 { x: RADIUS, y: RADIUS, z: RADIUS },
-    };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let surface = callback_surface(counted_sphere, MF_SURFACE_CONVEX, mf_vec3 { x: -RADIUS, y: -RADIUS, z: -RADIUS }, mf_vec3 { x: RADIUS, y: RADIUS, z: RADIUS });
     let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, d: mf_vec3 { x: -0.0, y: 1.0, z: -1e-300 }, t_max: f64::INFINITY, seed: 49730685199106 };
     let mut calls = 0u64;
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
@@ -354,15 +338,7 @@ unsafe extern "C" fn sphere_with_bad_tangent(user_data: *mut std::ffi::c_void, p
 #[test]
 fn segment_end_from_a_callback_is_checked() {
     let m = medium(&[("sigma", 0.01), ("alpha", 0.3)], &[("distribution", "beckmann")]);
-    let callbacks = mf_surface_callbacks {
-        point: Some(sphere_with_bad_tangent),
-        bound: None,
-        shape: MF_SURFACE_CONVEX,
-        bounds_min: mf_vec3 { x: -1.0, y: -1.0, z: -1.0 },
-        bounds_max: mf_vec3 { x: 1.0, y: 1.0, z: 1.0 },
-    };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let surface = callback_surface(sphere_with_bad_tangent, MF_SURFACE_CONVEX, mf_vec3 { x: -1.0, y: -1.0, z: -1.0 }, mf_vec3 { x: 1.0, y: 1.0, z: 1.0 });
     let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 1.02 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 1 };
     let mut calls = 0u64;
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
@@ -396,15 +372,7 @@ unsafe extern "C" fn tilted_plane(_: *mut std::ffi::c_void, p: mf_vec3, out: *mu
 #[test]
 fn plane_majorant_holds_at_rounded_positions() {
     let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730953e-56)], &[("distribution", "ggx")]);
-    let callbacks = mf_surface_callbacks {
-        point: Some(tilted_plane),
-        bound: None,
-        shape: MF_SURFACE_CONCAVE,
-        bounds_min: mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY },
-        bounds_max: mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: f64::INFINITY },
-    };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let surface = callback_surface(tilted_plane, MF_SURFACE_CONCAVE, mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY }, mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: f64::INFINITY });
     let origin = mf_vec3 { x: 2.917864118616786e-48, y: 7.315226577307254e-49, z: 6.7081289745737284e-49 };
     let d = mf_vec3 { x: 0.00019138411119676342, y: 0.9999953087410786, z: 0.003057101234345839 };
     let (mut violations, mut answered, mut refused) = (0, 0, 0);
@@ -471,15 +439,7 @@ unsafe extern "C" fn long_normal_plane(_: *mut std::ffi::c_void, p: mf_vec3, out
 #[test]
 fn collision_frame_is_unit() {
     let m = medium(&[("sigma", 0.01), ("alpha", 0.3)], &[("distribution", "beckmann")]);
-    let callbacks = mf_surface_callbacks {
-        point: Some(long_normal_plane),
-        bound: None,
-        shape: MF_SURFACE_CONVEX,
-        bounds_min: mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY },
-        bounds_max: mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: 0.0 },
-    };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    let surface = callback_surface(long_normal_plane, MF_SURFACE_CONVEX, mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY }, mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: 0.0 });
     let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.05 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 3 };
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     assert_eq!(unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
@@ -491,4 +451,12 @@ fn collision_frame_is_unit() {
         mf_surface_free(surface);
         mf_medium_free(m);
     }
+}
+
+/// A host surface of `point` callbacks (no `bound`) with the given shape and box.
+fn callback_surface(point: unsafe extern "C" fn(*mut std::ffi::c_void, mf_vec3, *mut mf_surface_point) -> i32, shape: u32, bounds_min: mf_vec3, bounds_max: mf_vec3) -> *mut mf_surface {
+    let callbacks = mf_surface_callbacks { point: Some(point), bound: None, shape, bounds_min, bounds_max };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_callbacks(&callbacks, &mut surface) }, mf_status::MF_OK);
+    surface
 }

@@ -95,8 +95,9 @@ const WIDE_COS_RANGE: f64 = 0.5;
 const LOOSE_AREA: f64 = 4.0;
 const WIDE_RANGE_COLLISIONS: f64 = 8.0;
 const MAX_WIDE_SHORTENINGS: u32 = 2;
-/// Ulps of the coordinates by which the bounds of `f` are widened (the rounding of the points
-/// where the surface is queried, with `|∇f| <= 1`).
+/// Ulps of the coordinates by which the bounds of `f` are widened: the rounding of the points
+/// where the surface is queried (at most `√3/2` ulp of `|q|∞`) times the slope of `f` (1 for a
+/// signed distance, a little more for an interpolated grid).
 const POSITION_ROUNDING: f64 = 4.0 * f64::EPSILON;
 /// Lipschitz steps above the shell per segment (each one surface query).
 const MAX_SKIPS: u32 = 64;

@@ -480,7 +480,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let t = seg.t + seg.bound.length;
         let p = origin + t * d;
         let start = match seg.bound.end {
-            Some(end) => self.checked(Ok(end), p, stats)?,
+            // Validated with its bound (`next_segment`); counted as the query it saves.
+            Some(end) => {
+                stats.surface_queries += 1;
+                end
+            }
             None => self.checked(self.surface.start_point(p, cache), p, stats)?,
         };
         Ok((t, start))

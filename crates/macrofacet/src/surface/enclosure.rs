@@ -12,7 +12,6 @@
 use super::MeanSurface;
 use crate::error::{Error, ErrorKind, Result};
 use glam::{DVec3, IVec3};
-use std::collections::HashMap;
 
 /// Fine cells per coarse block edge (a power of two: blocks halve down to cells).
 const BLOCK: i32 = 8;
@@ -60,8 +59,9 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
 
     // Kept cells, by a descent through blocks halving down to cells: one query at a block's
     // centre decides it whole when `f` there is at least half its diagonal from the level.
-    let mut kept = vec![false; (cells.x * cells.y * cells.z) as usize];
-    let index = |c: IVec3| ((c.z * cells.y + c.y) * cells.x + c.x) as usize;
+    // Whole blocks stay whole and only blocks the level set crosses keep a bit per cell, so time
+    // and memory follow the level set's area rather than the grid's volume.
+    let mut kept = Kept::new(blocks);
     let mut stack: Vec<(IVec3, i32)> = Vec::new();
     for bz in 0..blocks.z {
         for by in 0..blocks.y {
@@ -76,7 +76,9 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
         let block_centre = lo + (first.as_dvec3() + 0.5 * size as f64) * h;
         let f = surface.start_point(block_centre, &mut cache)?.validated(block_centre)?.f;
         if size == 1 {
-            kept[index(first)] = f - half_diagonal < level;
+            if f - half_diagonal < level {
+                kept.insert(first, 1);
+            }
             continue;
         }
         let block_half_diagonal = half_diagonal * size as f64;
@@ -85,13 +87,7 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
             continue;
         }
         if f + block_half_diagonal < level - half_diagonal {
-            for z in 0..size {
-                for y in 0..size {
-                    for x in 0..size {
-                        kept[index(first + IVec3::new(x, y, z))] = true;
-                    }
-                }
-            }
+            kept.insert(first, size);
             continue;
         }
         let half = size / 2;
@@ -104,54 +100,194 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
         }
     }
 
-    // The faces between kept and dropped cells (outside the grid counts as dropped).
-    let is_kept = |c: IVec3| c.cmpge(IVec3::ZERO).all() && c.cmplt(cells).all() && kept[index(c)];
-    let mut out = Enclosure { cell: h, ..Default::default() };
-    let mut vertex: HashMap<IVec3, u32> = HashMap::new();
-    let mut corner = |g: IVec3, out: &mut Enclosure| -> u32 {
-        *vertex.entry(g).or_insert_with(|| {
-            out.positions.push(lo + g.as_dvec3() * h);
-            (out.positions.len() - 1) as u32
-        })
+    // The faces between kept and dropped cells (outside the grid counts as dropped), each as a
+    // key in the order of a scan of the grid (z, y, x, axis, side), so that the mesh does not
+    // depend on the order in which they are found. 512³ cells × 6 faces fit in a u32.
+    let is_kept = |c: IVec3| c.cmpge(IVec3::ZERO).all() && c.cmplt(cells).all() && kept.contains(c);
+    let face_key = |c: IVec3, axis: usize, side: i32| ((((c.z * cells.y + c.y) * cells.x + c.x) as u32) * 3 + axis as u32) * 2 + u32::from(side > 0);
+    let step = |axis: usize, side: i32| {
+        let mut step = IVec3::ZERO;
+        step[axis] = side;
+        step
     };
-    for z in 0..cells.z {
-        for y in 0..cells.y {
-            for x in 0..cells.x {
-                let c = IVec3::new(x, y, z);
-                if !kept[index(c)] {
-                    continue;
-                }
-                for axis in 0..3 {
-                    for side in [-1, 1] {
-                        let mut step = IVec3::ZERO;
-                        step[axis] = side;
-                        if is_kept(c + step) {
-                            continue;
+    let mut faces: Vec<u32> = Vec::new();
+    let mut face_if_open = |c: IVec3, axis: usize, side: i32| {
+        if !is_kept(c + step(axis, side)) {
+            faces.push(face_key(c, axis, side));
+        }
+    };
+    for bz in 0..blocks.z {
+        for by in 0..blocks.y {
+            for bx in 0..blocks.x {
+                let block = IVec3::new(bx, by, bz);
+                let first = block * BLOCK;
+                match kept.block(block) {
+                    BlockCells::None => {}
+                    BlockCells::All => {
+                        // Only the cells on faces whose neighbouring block is not whole.
+                        for axis in 0..3 {
+                            for side in [-1, 1] {
+                                let across = block + step(axis, side);
+                                if across.cmpge(IVec3::ZERO).all() && across.cmplt(blocks).all() && matches!(kept.block(across), BlockCells::All) {
+                                    continue;
+                                }
+                                let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                                for i in 0..BLOCK {
+                                    for j in 0..BLOCK {
+                                        let mut c = first;
+                                        c[u] += i;
+                                        c[v] += j;
+                                        if side > 0 {
+                                            c[axis] += BLOCK - 1;
+                                        }
+                                        face_if_open(c, axis, side);
+                                    }
+                                }
+                            }
                         }
-                        // The face's corners, counter-clockwise seen from outside (along +side).
-                        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-                        let mut base = c;
-                        if side > 0 {
-                            base[axis] += 1;
-                        }
-                        let (mut du, mut dv) = (IVec3::ZERO, IVec3::ZERO);
-                        du[u] = 1;
-                        dv[v] = 1;
-                        let quad = [base, base + du, base + du + dv, base + dv].map(|g| corner(g, &mut out));
-                        if side > 0 {
-                            out.triangles.push([quad[0], quad[1], quad[2]]);
-                            out.triangles.push([quad[0], quad[2], quad[3]]);
-                        } else {
-                            out.triangles.push([quad[0], quad[2], quad[1]]);
-                            out.triangles.push([quad[0], quad[3], quad[2]]);
+                    }
+                    BlockCells::Some(bits) => {
+                        for (word, &w) in bits.iter().enumerate() {
+                            let mut w = w;
+                            while w != 0 {
+                                let bit = word as i32 * 64 + w.trailing_zeros() as i32;
+                                w &= w - 1;
+                                for axis in 0..3 {
+                                    for side in [-1, 1] {
+                                        face_if_open(first + Kept::cell_of_bit(bit), axis, side);
+                                    }
+                                }
+                            }
                         }
                     }
                 }
             }
         }
     }
+    let mut faces = faces;
+    faces.sort_unstable();
+    let mut out = Enclosure { cell: h, ..Default::default() };
+    // A corner's vertex, numbered in order of first use. The faces come in increasing z, and a
+    // face's corners lie on its cell's two z planes, so two planes of ids (by parity of z, each
+    // entry stamped with its z) remember every corner that can still be shared.
+    let plane = ((cells.x + 1) * (cells.y + 1)) as usize;
+    let mut vertex: Vec<(i32, u32)> = vec![(-1, 0); 2 * plane];
+    let mut corner = |g: IVec3, out: &mut Enclosure| -> u32 {
+        let slot = &mut vertex[(g.z & 1) as usize * plane + (g.y * (cells.x + 1) + g.x) as usize];
+        if slot.0 != g.z {
+            out.positions.push(lo + g.as_dvec3() * h);
+            *slot = (g.z, (out.positions.len() - 1) as u32);
+        }
+        slot.1
+    };
+    for key in faces {
+        let (side, axis, cell) = (if key % 2 == 1 { 1 } else { -1 }, (key / 2 % 3) as usize, (key / 6) as i32);
+        let c = IVec3::new(cell % cells.x, cell / cells.x % cells.y, cell / (cells.x * cells.y));
+        // The face's corners, counter-clockwise seen from outside (along +side).
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut base = c;
+        if side > 0 {
+            base[axis] += 1;
+        }
+        let (mut du, mut dv) = (IVec3::ZERO, IVec3::ZERO);
+        du[u] = 1;
+        dv[v] = 1;
+        let quad = [base, base + du, base + du + dv, base + dv].map(|g| corner(g, &mut out));
+        if side > 0 {
+            out.triangles.push([quad[0], quad[1], quad[2]]);
+            out.triangles.push([quad[0], quad[2], quad[3]]);
+        } else {
+            out.triangles.push([quad[0], quad[2], quad[1]]);
+            out.triangles.push([quad[0], quad[3], quad[2]]);
+        }
+    }
     if out.triangles.is_empty() {
         return Err(invalid(format!("the region f < {level} is empty")));
     }
     Ok(out)
+}
+
+/// The kept cells of the grid, by block of `BLOCK³` cells: none, all, or some (a bit per cell).
+struct Kept {
+    blocks: IVec3,
+    /// Per block: [`NONE`](Kept::NONE), [`ALL`](Kept::ALL), or `SOME + i` for `bits[i]`.
+    state: Vec<u32>,
+    bits: Vec<[u64; BLOCK_WORDS]>,
+}
+
+/// 64-bit words per block of `BLOCK³` cells.
+const BLOCK_WORDS: usize = (BLOCK * BLOCK * BLOCK) as usize / 64;
+
+/// The kept cells of one block.
+enum BlockCells<'a> {
+    None,
+    All,
+    Some(&'a [u64; BLOCK_WORDS]),
+}
+
+impl Kept {
+    const NONE: u32 = 0;
+    const ALL: u32 = 1;
+    const SOME: u32 = 2;
+
+    fn new(blocks: IVec3) -> Self {
+        Kept { blocks, state: vec![Self::NONE; (blocks.x * blocks.y * blocks.z) as usize], bits: Vec::new() }
+    }
+
+    fn block_index(&self, block: IVec3) -> usize {
+        ((block.z * self.blocks.y + block.y) * self.blocks.x + block.x) as usize
+    }
+
+    fn bit_of_cell(local: IVec3) -> i32 {
+        (local.z * BLOCK + local.y) * BLOCK + local.x
+    }
+
+    fn cell_of_bit(bit: i32) -> IVec3 {
+        IVec3::new(bit % BLOCK, bit / BLOCK % BLOCK, bit / (BLOCK * BLOCK))
+    }
+
+    /// Keeps the aligned cube of `size³` cells at `first` (inside one block).
+    fn insert(&mut self, first: IVec3, size: i32) {
+        let block = first.div_euclid(IVec3::splat(BLOCK));
+        let index = self.block_index(block);
+        if size == BLOCK {
+            self.state[index] = Self::ALL;
+            return;
+        }
+        if self.state[index] == Self::NONE {
+            self.state[index] = Self::SOME + self.bits.len() as u32;
+            self.bits.push([0; BLOCK_WORDS]);
+        }
+        let words = &mut self.bits[(self.state[index] - Self::SOME) as usize];
+        let local = first - block * BLOCK;
+        for z in 0..size {
+            for y in 0..size {
+                for x in 0..size {
+                    let bit = Self::bit_of_cell(local + IVec3::new(x, y, z));
+                    words[(bit / 64) as usize] |= 1 << (bit % 64);
+                }
+            }
+        }
+    }
+
+    fn block(&self, block: IVec3) -> BlockCells<'_> {
+        match self.state[self.block_index(block)] {
+            Self::NONE => BlockCells::None,
+            Self::ALL => BlockCells::All,
+            i => BlockCells::Some(&self.bits[(i - Self::SOME) as usize]),
+        }
+    }
+
+    /// Whether the cell `c` (inside the grid) is kept.
+    fn contains(&self, c: IVec3) -> bool {
+        let block = c.div_euclid(IVec3::splat(BLOCK));
+        match self.block(block) {
+            BlockCells::None => false,
+            BlockCells::All => true,
+            BlockCells::Some(words) => {
+                let bit = Self::bit_of_cell(c - block * BLOCK);
+                words[(bit / 64) as usize] >> (bit % 64) & 1 == 1
+            }
+        }
+    }
 }

@@ -177,10 +177,13 @@ impl Scene<'_> {
     pub fn enclosure(&mut self, b: &mut Bytes, level: f64) {
         let s = self.surface.0 as *const mf_surface;
         let level = if b.u8() % 8 == 0 { b.float() } else { level };
-        // Cells relative to the region's extent (the surface's size plus the level; relative to
-        // the size alone, a level 1e3 sizes out took 512 cells per axis and 75 % of the target's
-        // time), and the default (0: 1/128 of the extent, ~65 ms for a torus) drawn rarely.
-        let extent = (self.size + level.abs()).min(f64::MAX);
+        // Cells relative to the region's extent (the surface's bounding box plus the level: a
+        // level 1e3 sizes out, or a surface far larger than the drawn size, took 512 cells per
+        // axis and most of the target's time), and the default (0: 1/128 of the extent, ~65 ms
+        // for a torus) drawn rarely.
+        let (min, max) = self.bounding_box();
+        let box_extent = if (max - min).is_finite() { (max - min).max_element() } else { self.size };
+        let extent = (box_extent + level.abs()).min(f64::MAX);
         let cell = match b.u8() {
             0 => 0.0,
             1..=31 => b.choose(&[f64::NAN, -1.0, f64::INFINITY]),

@@ -491,3 +491,35 @@ fn grazing_smooth_lobe_majorant_holds() {
         mf_medium_free(m);
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-f92bbbb70f1ab04a562ada5de97959df00c1b6e5`: GGX at α = 1e6
+/// (σ = 1e-50, lengthscale 1.4e-56), a flipped sphere of radius 2.2e-49 and a ray from 10 radii
+/// out along the radius, so `d·n = −1` along the whole segment. One ulp of `d·n` below 1 in
+/// magnitude is an angle of 2.1e-8 rad, where this lobe's projected area is already 1.1e-4
+/// larger than along the normal: `σ_t` (its own rounding of `d·n`) exceeded the majorant at the
+/// first tentative collision of every seed. The bounds now cover `d·n` rounded up to 8 ulps past
+/// the segment's range (`src/tracking.rs`, `COS_ROUNDING`).
+#[test]
+fn rough_lobe_along_the_normal_majorant_holds() {
+    let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730953e-56)], &[("distribution", "ggx")]);
+    let mut sphere = ptr::null_mut();
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let pole = mf_vec3 { x: 0.09350315004139367, y: -1.0594914672242623e-16, z: -0.9956189838147607 };
+    assert_eq!(unsafe { mf_surface_new_sphere(zero, 2.1878780977404597e-49, true, pole, &mut sphere) }, mf_status::MF_OK);
+    let origin = mf_vec3 { x: 4.610608337288503e-56, y: -5.224316175345618e-71, z: -2.187878097740457e-48 };
+    let d = mf_vec3 { x: 2.107344532887127e-8, y: -2.387848484363566e-23, z: -1.0000009999999997 };
+    let mut violations = 0;
+    for seed in (0..64).chain([u64::MAX]) {
+        let q = mf_track_query { origin, d, t_max: 2.1878780977404594e-48, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        assert_eq!(unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
+        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+        assert_eq!(unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
+        violations += unsafe { c.assume_init() }.stats.majorant_violations + t.stats.majorant_violations;
+    }
+    assert_eq!(violations, 0, "majorant violations over 65 seeds");
+    unsafe {
+        mf_surface_free(sphere);
+        mf_medium_free(m);
+    }
+}

@@ -145,15 +145,38 @@ impl ProjectedAreaBounds {
             let (sin, cos) = theta.sin_cos();
             ndf.projected_area(DVec3::new(sin, 0.0, -cos))
         };
+        let extreme = |a: f64, b: f64| if side > 0.0 { a.max(b) } else { a.min(b) };
         let (theta_lo, theta_hi) = (cos[1].clamp(-1.0, 1.0).acos(), cos[0].clamp(-1.0, 1.0).acos());
         let width = theta_hi - theta_lo;
-        if width < NARROW_RANGE {
-            return area(0.5 * (theta_lo + theta_hi)) + side * 0.5 * self.lipschitz * width;
+        let inside = if width < NARROW_RANGE {
+            area(0.5 * (theta_lo + theta_hi)) + side * 0.5 * self.lipschitz * width
+        } else {
+            extreme(area(theta_lo), area(theta_hi)) + side * 0.5 * self.lipschitz * width
+        };
+        // σ_t rounds d·n up to COS_ROUNDING past the range. Usually the area changes over that
+        // sliver by less than half the relative margin AREA_ROUNDING (the Lipschitz bound times
+        // the sliver's angle); otherwise the area is monotone over the sliver, so its far end
+        // bounds it.
+        let sliver = sliver_angle(cos[0]).max(sliver_angle(cos[1]));
+        if self.lipschitz * sliver <= 0.5 * AREA_ROUNDING * inside.abs() {
+            return inside;
         }
-        let (a, b) = (area(theta_lo), area(theta_hi));
-        let end = if side > 0.0 { a.max(b) } else { a.min(b) };
-        end + side * 0.5 * self.lipschitz * width
+        let beyond = [(cos[0] - COS_ROUNDING).max(-1.0), (cos[1] + COS_ROUNDING).min(1.0)].map(|c| area(c.acos()));
+        extreme(inside, extreme(beyond[0], beyond[1]))
     }
+}
+
+/// An upper bound of the angle between directions whose cosines with a normal are `c` and a
+/// cosine within `δ` = [`COS_ROUNDING`] of it: within `2δ` of a pole both lie within
+/// `acos(1 − 3δ) ≈ √(6δ)` of it; elsewhere `δ` over the smallest sine on the way (mean value
+/// theorem, `|acos'| = 1/sin` grows toward the poles).
+fn sliver_angle(c: f64) -> f64 {
+    let (c, delta) = (c.abs().min(1.0), COS_ROUNDING);
+    if 1.0 - c <= 2.0 * delta {
+        return 3.0 * delta.sqrt();
+    }
+    let far = c + delta;
+    delta / ((1.0 - far) * (1.0 + far)).sqrt()
 }
 
 /// Relative margin of `S_up` and `S_lo` for the rounding of `d·n` (~1e-16) where the bound and
@@ -161,6 +184,12 @@ impl ProjectedAreaBounds {
 /// 5e-9 relative per ulp at α = 1e-6 before σ underflows (found by fuzzing: gpss α = 1e-6 at
 /// d·n = 1.09e-5 exceeded the majorant by 2.2e-9).
 const AREA_ROUNDING: f64 = 1e-7;
+
+/// How far `σ_t`'s `d·n` may lie outside the range the segment bound computed for it (unit vectors
+/// rounded apart, a dot product, and the bound's `cos(acos c)`): a few ulps of 1. Near the poles
+/// that is an angle of up to 6e-8 rad, over which a rough lobe's area changes by 1e-4 relative
+/// (found by fuzzing: GGX α = 1e6 along the normal exceeded the majorant at every collision).
+const COS_ROUNDING: f64 = 8.0 * f64::EPSILON;
 
 /// Below this width (radians) a range of directions is bounded from its midpoint: at most a
 /// `lipschitz × width / 2` loss, a few percent, for half the evaluations.

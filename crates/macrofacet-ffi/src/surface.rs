@@ -208,7 +208,7 @@ impl MeanSurface for CallbackSurface {
                 let end = self.point(p + length * d)?;
                 Ok(convex_bound(start, &end, d, length, curvature))
             }
-            None => Ok(SegmentBound::lipschitz(start.f, length)),
+            None => Ok(SegmentBound::lipschitz(start.f, length, self.lipschitz())),
         }
     }
 

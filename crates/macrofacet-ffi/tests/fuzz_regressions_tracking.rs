@@ -523,3 +523,75 @@ fn rough_lobe_along_the_normal_majorant_holds() {
         mf_medium_free(m);
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-d5d477e31881283f6ffd008660be24d4e683e9cb`: a 3×3×3 SDF grid
+/// under a shearing `to_world`, whose interpolated `f` changes faster than distance (Lipschitz
+/// constant above 1). `mf_surface_enclosure` decided cells with the bound of a signed distance
+/// (`f` changes by at most half a cell diagonal from a cell's centre to its corners), dropped
+/// cells of the region, and a vertex of the enclosure had `f` = 2.95e50 below the level 3e50.
+/// The enclosure now scales that bound by the surface's Lipschitz constant
+/// (`MeanSurface::lipschitz`).
+#[test]
+fn enclosure_of_a_steep_grid_contains_the_region() {
+    let values: [f32; 27] = [
+        0.70465285, 0.5457342, 0.70465285, 0.5457342, 0.33862746, 0.5457342, 0.70465285, 0.5457342, 0.70465285, 0.5457342, 0.33862746, 0.5457342, 0.33862746, -0.16137254, 0.33862746, 0.5457342, 0.33862746, 0.5457342, 0.70465285,
+        0.5457342, 0.70465285, 0.5457342, 0.33862746, 0.5457342, 0.70465285, 0.5457342, 0.70465285,
+    ];
+    let to_world = [
+        -2.1607270002238695e50, -8.794166855489053e50, 1.1475733941442131e51, -2.6042004286460423e49, 3.955601091442521e50, 1.0800880395553268e51, 9.021794945174574e50, -1.1889138216085182e51, -1.390622379304777e51, 4.438715280936198e50,
+        7.831524876428574e49, 4.342178012234358e50,
+    ];
+    let grid = mf_grid { values: values.as_ptr(), nx: 3, ny: 3, nz: 3, to_world };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_grid(&grid, &mut surface) }, mf_status::MF_OK, "{}", last_error());
+    let level = 3.0000000000000002e50;
+    let mut enclosure = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_enclosure(surface, ptr::null_mut(), level, 8.468034533926575e49, &mut enclosure) }, mf_status::MF_OK, "{}", last_error());
+    let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
+    assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
+    let mesh = unsafe { mesh.assume_init() };
+    let positions = unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) };
+    for v in positions.chunks_exact(3) {
+        let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
+        assert!(point.f >= level, "enclosure vertex {v:?} inside the region: f = {:e} < level {level:e}", point.f);
+    }
+    unsafe {
+        mf_enclosure_free(enclosure);
+        mf_surface_free(surface);
+    }
+}
+
+/// `fuzz/artifacts/fields/crash-20276abe48ca25aaac6bbcda0ad3559e1626f4d4`: a gpss medium with
+/// α = 1e-6 and `vndf_sampling = mixture` (seeds/000 Eq. 40), a field giving an anisotropy
+/// matrix at a collision. The localized phase function evaluated the local distribution but kept
+/// the medium's mixture sampler, whose α = 1e-6 flakes are invisible from `wi`:
+/// `mf_phase_eval_pdf_local` answered a positive value with pdf 0 (that direction could never be
+/// sampled: a biased render). The mixture is now rebuilt from the local gpss distribution, or
+/// replaced by exact sampling for an anisotropy matrix (no Beckmann limit to mix with).
+#[test]
+fn localized_mixture_samples_the_local_distribution() {
+    let m = medium(&[("sigma", 1e50), ("alpha", 1e-6), ("mixture_ratio", 9.99999999998998e-1)], &[("distribution", "gpss"), ("material", "Cr"), ("vndf_sampling", "mixture")]);
+    let a = 1.124682650380666e97;
+    let scale = 0.5003939084657291;
+    let matrix = mf_local_params { set: 15, sigma: 2.3713737056616214e49, alpha: mf_vec3 { x: 10.0, y: 10.0, z: 10.0 }, anisotropy: [a, a, a, 0.0, 0.0, 0.0], reflectance_scale: mf_rgb { r: scale, g: scale, b: scale } };
+    // The same point with a gpss roughness instead of a matrix: the mixture of the local gpss.
+    let roughness = mf_local_params { set: 15 & !MF_LOCAL_ANISOTROPY, ..matrix };
+    let frame = mf_frame {
+        normal: mf_vec3 { x: 0.7387941811789444, y: 1.2222744014504094e-5, z: -0.6739311223758239 },
+        tangent: mf_vec3 { x: 5.39454224564444e-6, y: -0.9999999999107517, z: -1.2222744014504094e-5 },
+    };
+    let wi = mf_vec3 { x: -0.9645746758295346, y: -0.02367927741330882, z: -0.26274509808849267 };
+    let u = [0.27837550639712605, 0.18304711162126086, 0.7451439733298825, 0.0005698311946117363, 0.8281247457489371];
+    for (name, local) in [("anisotropy", matrix), ("roughness", roughness)] {
+        let mut v = mf_phase_value { value: mf_rgb { r: -1.0, g: -1.0, b: -1.0 }, pdf: -1.0 };
+        assert_eq!(unsafe { mf_phase_eval_pdf_local(m, &local, &frame, wi, mf_vec3 { x: 0.0, y: 1.0, z: 0.0 }, &mut v) }, mf_status::MF_OK, "{}", last_error());
+        assert!(v.value.r > 0.0 && v.pdf > 0.0, "{name}: eval {:?} with pdf {}", v.value, v.pdf);
+        let mut s = std::mem::MaybeUninit::<mf_phase_sample_result>::uninit();
+        assert_eq!(unsafe { mf_phase_sample_local(m, &local, &frame, wi, u.as_ptr(), s.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
+        let s = unsafe { s.assume_init() };
+        assert!(s.valid && s.pdf > 0.0, "{name}: {s:?}");
+    }
+    unsafe { mf_medium_free(m) };
+}

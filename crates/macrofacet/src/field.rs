@@ -13,9 +13,9 @@
 use crate::error::{check_positive, Error, ErrorKind, Result};
 use crate::frame::Frame;
 use crate::height::HeightProfile;
-use crate::ndf::{Beckmann, Ggx, Gpss, GpssMatrix, Ltmd, LtmdBase, Ndf};
+use crate::ndf::{Beckmann, BeckmannUniformMixture, Ggx, Gpss, GpssMatrix, Ltmd, LtmdBase, Ndf};
 use crate::surface::SurfacePoint;
-use crate::{MacrofacetMedium, Rgb};
+use crate::{MacrofacetMedium, Rgb, VndfSampling};
 use glam::{DMat2, DMat3, DVec2, DVec3};
 
 /// What varies at one point; `None` keeps the medium's own value.
@@ -163,6 +163,15 @@ impl MacrofacetMedium {
         }
         if let Some(scale) = local.reflectance_scale {
             m.phase.micro_bsdf = self.phase.micro_bsdf.with_reflectance_scale(scale)?;
+        }
+        // The seeds/000 Eq. 40 mixture mixes in the Beckmann limit of one gpss distribution: the
+        // local one (sampling the medium's own gave pdf 0 where the local phase function is not
+        // 0, found by fuzzing), or exact sampling for an anisotropy matrix, which has no such limit.
+        if let VndfSampling::Mixture(mix) = self.phase.sampling {
+            m.phase.sampling = match m.phase.ndf {
+                Ndf::Gpss(gpss) => VndfSampling::Mixture(BeckmannUniformMixture { ndf: gpss, ratio: mix.ratio }),
+                _ => VndfSampling::Exact,
+            };
         }
         Ok(m)
     }

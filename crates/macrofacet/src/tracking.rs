@@ -376,8 +376,8 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             if let Some(end) = bound.end {
                 end.validated(p + bound.length * d)?;
             }
-            // A side without a bound gets the Lipschitz bound every signed distance has.
-            let lipschitz = SegmentBound::lipschitz(start.f, bound.length);
+            // A side without a bound gets the surface's Lipschitz bound.
+            let lipschitz = SegmentBound::lipschitz(start.f, bound.length, self.surface.lipschitz());
             if bound.f_lo.iter().any(|v| v.is_infinite()) {
                 bound.f_lo = lipschitz.f_lo;
             }

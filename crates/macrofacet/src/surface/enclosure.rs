@@ -3,10 +3,11 @@
 //! level `k σ`), so that no ray ever sphere-traces the level set.
 //!
 //! Built from cubes of a grid: a cell is kept when it may meet the region, which the Lipschitz
-//! bound decides from one query at its centre (`f(x) >= f(c) − |x − c|`), and the enclosure is
-//! the boundary between kept and dropped cells. It is therefore conservative by construction (no
-//! point of the region lies outside it), watertight and free of self-intersections; it lies
-//! within one cell diagonal of the level set. Blocks of cells are halved only where the same
+//! bound decides from one query at its centre (`f(x) >= f(c) − L |x − c|`, `L = 1` for a signed
+//! distance, [`MeanSurface::lipschitz`]), and the enclosure is the boundary between kept and
+//! dropped cells. It is therefore conservative by construction (no point of the region lies
+//! outside it), watertight and free of self-intersections; it lies within `L` cell diagonals of
+//! the level set. Blocks of cells are halved only where the same
 //! bound at their centre leaves them undecided, so the queries follow the level set.
 
 use super::MeanSurface;
@@ -50,7 +51,9 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     if (hi - lo).max_element() / h > MAX_CELLS {
         h = (hi - lo).max_element() / MAX_CELLS;
     }
-    let half_diagonal = 0.5 * 3f64.sqrt() * h;
+    // Half a cell diagonal, times the Lipschitz constant: how much f can change from a cell's
+    // centre to its corners.
+    let half_diagonal = 0.5 * 3f64.sqrt() * h * surface.lipschitz();
     // Cells are kept up to a hair above the level, so that every point of the region lies at
     // least 1e-3 cells inside the enclosure: safe from the rounding of hosts' f32 vertices.
     let level = level + 1e-3 * h;

@@ -211,10 +211,9 @@ impl MeanSurface for GridSurface {
         Ok(SegmentBound { length, f_lo: [start.f, start.f - lipschitz * length], f_hi: [start.f, start.f + lipschitz * length], cos: [-1.0, 1.0], end: None })
     }
 
-    /// An interpolated distance may change faster than the distance itself: steps of
-    /// `(f − level)/L` with the grid's Lipschitz constant `L`.
-    fn clearance(&self, start: &SurfacePoint, _p: DVec3, _d: DVec3, level: f64, _: &mut ()) -> f64 {
-        (start.f - level) / self.global_lipschitz
+    /// An interpolated distance may change faster than the distance itself.
+    fn lipschitz(&self) -> f64 {
+        self.global_lipschitz
     }
 
     fn bounding_box(&self) -> Aabb {

@@ -86,12 +86,13 @@ pub struct SegmentBound {
 }
 
 impl SegmentBound {
-    /// The bound every signed-distance function admits: `|f(p + s d) − f(p)| <= s`, any frame.
-    pub fn lipschitz(f0: f64, length: f64) -> SegmentBound {
+    /// The bound every `L`-Lipschitz `f` admits (`L = 1` for a signed distance,
+    /// [`MeanSurface::lipschitz`]): `|f(p + s d) − f(p)| <= L s`, any frame.
+    pub fn lipschitz(f0: f64, length: f64, constant: f64) -> SegmentBound {
         SegmentBound {
             length,
-            f_lo: [f0, f0 - length],
-            f_hi: [f0, f0 + length],
+            f_lo: [f0, f0 - constant * length],
+            f_hi: [f0, f0 + constant * length],
             cos: [-1.0, 1.0],
             end: None,
         }
@@ -207,10 +208,16 @@ pub trait MeanSurface {
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut Self::Cache) -> Result<SegmentBound>;
 
     /// How far along `d` from `p` (where `start = point(p)` and `start.f > level`) `f` stays
-    /// above `level`. Every signed distance allows `start.f − level`; a surface that knows `f`
-    /// along the ray may say more (up to `+∞`: never below `level`).
+    /// above `level`. Every surface allows `(start.f − level) / L` ([`Self::lipschitz`]); one
+    /// that knows `f` along the ray may say more (up to `+∞`: never below `level`).
     fn clearance(&self, start: &SurfacePoint, _p: DVec3, _d: DVec3, level: f64, _cache: &mut Self::Cache) -> f64 {
-        start.f - level
+        (start.f - level) / self.lipschitz()
+    }
+
+    /// A Lipschitz constant of `f` over all space: 1 for a signed distance; an interpolated
+    /// grid's can be larger.
+    fn lipschitz(&self) -> f64 {
+        1.0
     }
 
     /// A lower bound of `|f(p)|`, cheaper than [`Self::point`] (0 when unknown): lets the

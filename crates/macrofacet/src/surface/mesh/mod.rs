@@ -375,7 +375,7 @@ impl TriangleMesh {
     fn far_bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &MeshCache) -> SegmentBound {
         let reach = start.f.abs() * (1.0 - 1e-12);
         let length = length.min(reach.max(0.5 * tolerance)).max(f64::MIN_POSITIVE);
-        let mut bound = SegmentBound::lipschitz(start.f, length);
+        let mut bound = SegmentBound::lipschitz(start.f, length, self.lipschitz());
         if length <= reach {
             // The triangle closest at the start, when the cache recorded it there.
             let nearest = match cache.hint {

@@ -51,13 +51,19 @@ impl Frame {
     }
 }
 
-/// `v` divided by its largest component magnitude (a power of two, so exactly), which leaves
-/// its direction unchanged. Normalising then squares numbers near 1: `|v|²` of a vector as short
+/// 2^-500 and 2^500: vectors whose largest component lies between need no rescaling.
+const NO_RESCALE_MIN: f64 = 3.054936363499605e-151;
+const NO_RESCALE_MAX: f64 = 3.273390607896142e150;
+
+/// `v` scaled by a power of two (exactly) to bring its largest component into `[1, 2)` when that
+/// lies outside `[2^-500, 2^500]` (otherwise `v` itself), which leaves its direction unchanged. Normalising then squares numbers near 1: `|v|²` of a vector as short
 /// as 1e-159 is subnormal (a normal of length 1e-159 gave world directions of length 0.999999,
 /// issue 9 item 5) and that of a vector longer than 1e154 overflows.
 pub(crate) fn rescaled(v: DVec3) -> DVec3 {
     let largest = v.abs().max_element();
-    if largest == 0.0 || !largest.is_finite() {
+    // Between 2^-500 and 2^500 nothing under- or overflows, and scaling by a power of two
+    // commutes exactly with normalising: the same result without the log2 (a hot path).
+    if largest == 0.0 || !largest.is_finite() || (NO_RESCALE_MIN..=NO_RESCALE_MAX).contains(&largest) {
         return v;
     }
     // 2^(−exponent of largest): exact, and no overflow for subnormal `largest` (2^1074 would).

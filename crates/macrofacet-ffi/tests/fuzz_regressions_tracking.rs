@@ -595,3 +595,32 @@ fn localized_mixture_samples_the_local_distribution() {
     }
     unsafe { mf_medium_free(m) };
 }
+
+/// `fuzz/artifacts/tracking/crash-2d7190b1a36507c62cae84f278d873e98e51484c`: a sphere of radius
+/// 5.8e-36 centred at (0, 1, 2), its enclosure at level 5.2e-35 with cells of 2e-36, far below
+/// an ulp of the coordinates (2.2e-16): the vertices `lo + g h` rounded onto (x, 1, 2), inside
+/// the region (f = 4.97e-35 < level). Cells are now at least 1e5 ulps of the largest
+/// coordinate, so the region lies inside a few of them.
+#[test]
+fn enclosure_far_from_the_origin_contains_the_region() {
+    let mut sphere = ptr::null_mut();
+    let pole = mf_vec3 { x: 0.0, y: -1.0, z: 0.0 };
+    assert_eq!(unsafe { mf_surface_new_sphere(mf_vec3 { x: 0.0, y: 1.0, z: 2.0 }, 5.782903863735844e-36, false, pole, &mut sphere) }, mf_status::MF_OK);
+    let level = 5.166912686415101e-35;
+    let mut enclosure = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_enclosure(sphere, ptr::null_mut(), level, 1.9996642309308483e-36, &mut enclosure) }, mf_status::MF_OK, "{}", last_error());
+    let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
+    assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
+    let mesh = unsafe { mesh.assume_init() };
+    assert!(mesh.triangle_count > 0);
+    for v in unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) }.chunks_exact(3) {
+        let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+        assert_eq!(unsafe { mf_surface_eval(sphere, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
+        assert!(point.f >= level, "enclosure vertex {v:?} inside the region: f = {:e} < level {level:e}", point.f);
+    }
+    unsafe {
+        mf_enclosure_free(enclosure);
+        mf_surface_free(sphere);
+    }
+}

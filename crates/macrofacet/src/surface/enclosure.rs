@@ -18,6 +18,8 @@ use glam::{DVec3, IVec3};
 const BLOCK: i32 = 8;
 /// The largest grid, in fine cells along the longest axis (the cell grows beyond it).
 const MAX_CELLS: f64 = 512.0;
+/// The smallest cell, in ulps of the largest coordinate (the cell grows below it).
+const MIN_CELL_ULPS: f64 = 1e5;
 
 /// A triangle mesh: positions and counter-clockwise (seen from outside) triangles.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -45,7 +47,11 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     // The region lies within `level` of the box (f is a signed distance); one cell of margin
     // keeps the enclosure off the region's boundary.
     let extent = (bounds.max - bounds.min).max_element().max(level.abs()).max(f64::MIN_POSITIVE);
-    let mut h = if cell > 0.0 { cell } else { extent / 128.0 };
+    // Vertices `lo + g h` are rounded by a few ulps of the coordinates: cells of at least
+    // MIN_CELL_ULPS of them keep that rounding within 1/50 of the hair below (found by fuzzing:
+    // a sphere of radius 6e-36 at (0, 1, 2), where the cells were below an ulp).
+    let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element() + level.max(0.0);
+    let mut h = (if cell > 0.0 { cell } else { extent / 128.0 }).max(MIN_CELL_ULPS * f64::EPSILON * magnitude);
     let grow = level.max(0.0) + h;
     let (lo, hi) = (bounds.min - DVec3::splat(grow), bounds.max + DVec3::splat(grow));
     if (hi - lo).max_element() / h > MAX_CELLS {
@@ -55,8 +61,10 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     // centre to its corners.
     let half_diagonal = 0.5 * 3f64.sqrt() * h * surface.lipschitz();
     // Cells are kept up to a hair above the level, so that every point of the region lies at
-    // least 1e-3 cells inside the enclosure: safe from the rounding of hosts' f32 vertices.
-    let level = level + 1e-3 * h;
+    // least 1e-3 cells inside the enclosure: safe from the rounding of the vertices, and of a
+    // host's f32 copy of them while the cells exceed 1e-4 of the coordinates (the default cell
+    // of a surface near the origin is 1/128 of its size).
+    let level = level + 1e-3 * h * surface.lipschitz();
     let blocks = ((hi - lo) / (h * BLOCK as f64)).ceil().as_ivec3().max(IVec3::ONE);
     let cells = blocks * BLOCK;
 

@@ -259,7 +259,8 @@ int mfrender_main(int argc, char** argv) {
         ParsedScene parsed = parse_scene_file(scene_path, defines, &problems);
         for (const std::string& w : parsed.warnings) std::fprintf(stderr, "mfrender: warning: %s\n", w.c_str());
         bopts.allow_macrofacet_placeholders = false;  // --check validates macrofacet parameters too
-        bopts.validate_only = check;  // spatially varying parameters: validated, not rendered yet
+        bopts.validate_only = check;
+        bopts.threads = ropts.threads;  // spatially varying parameters: validated, not rendered yet
         BuildReport report;
         std::unique_ptr<Scene> scene;
         if (parsed.root) scene = build_scene(parsed, bopts, &report, &problems);

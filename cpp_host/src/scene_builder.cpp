@@ -6,8 +6,11 @@
 #include <macrofacet.h>
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "image_io.h"
 #include "library_abi.h"
@@ -53,6 +56,7 @@ public:
                 errors.add(e);
             }
         }
+        finish_regions(errors);
         if (!sensor && !sensor_seen && !root.broken)
             errors.add(Error(root.loc, "the scene has no <sensor> (mfrender needs a perspective sensor)"));
         try {
@@ -113,8 +117,62 @@ private:
         }
     }
 
+    /// A medium whose mean surface is a shape, and the shape that bounds its region (f below
+    /// the shell's top, or the gpis envelope): the mean surface (a mesh's hierarchy and grid) and
+    /// the enclosure cost most of a scene's loading, so they are built after the scene graph, in
+    /// parallel, then added in the order of the file.
+    struct PendingRegion {
+        std::shared_ptr<Shape> shape;
+        std::shared_ptr<const MediumParamBag> bag;
+        bool gpis;
+        std::shared_ptr<const Medium> medium;
+        std::shared_ptr<Shape> boundary;
+        std::exception_ptr error;
+    };
+
+    void build_region(PendingRegion& r) {
+        try {
+            auto surface = MeanSurface::of(*r.shape);
+            if (r.gpis) {
+                auto g = create_gpis_medium(*r.bag, surface);
+                r.boundary = make_region_boundary(r.shape, *surface, g->envelope(), g);
+                r.medium = g;
+            } else {
+                auto m = create_macrofacet_medium(*r.bag, surface);
+                r.boundary = make_region_boundary(r.shape, *surface, m->shell_top(), m);
+                r.medium = m;
+            }
+        } catch (...) {
+            r.error = std::current_exception();
+        }
+    }
+
+    void finish_regions(ErrorSink& errors) {
+        const size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+        const size_t n_threads = std::min(pending_.size(), opts_.threads > 0 ? size_t(opts_.threads) : hardware);
+        std::atomic<size_t> next{0};
+        auto work = [&] {
+            for (size_t i; (i = next.fetch_add(1)) < pending_.size();) build_region(pending_[i]);
+        };
+        std::vector<std::thread> pool;
+        for (size_t t = 1; t < n_threads; ++t) pool.emplace_back(work);
+        work();
+        for (std::thread& t : pool) t.join();
+        for (PendingRegion& r : pending_) {
+            try {
+                if (r.error) std::rethrow_exception(r.error);
+                scene_->media.push_back(r.medium);
+                scene_->add_shape(r.boundary);
+            } catch (const Error& e) {
+                errors.add(e);
+            }
+        }
+        pending_.clear();
+    }
+
     const BuildOptions& opts_;
     BuildReport* report_;
+    std::vector<PendingRegion> pending_;
     std::unique_ptr<Scene> scene_;
     std::map<const SceneObject*, std::shared_ptr<Bsdf>> bsdfs_;
     std::map<const SceneObject*, std::shared_ptr<const Texture>> textures_;
@@ -789,16 +847,8 @@ private:
                                                           "its own (the medium replaces it): use <bsdf type=\"null\"/> or none");
             if (em) throw Error(ems[0]->loc, o.describe() + ": the mean surface of a " + kind + " medium cannot be an emitter");
             shape->bsdf = make_null_bsdf();  // (shape->interior stays empty: the medium owns the shape)
-            auto surface = MeanSurface::of(*shape);
-            if (kind == "gpis") {
-                auto g = create_gpis_medium(*mf_bag[0], surface);
-                scene_->media.push_back(g);
-                scene_->add_shape(make_region_boundary(shape, *surface, g->envelope(), g));
-            } else {
-                auto m = create_macrofacet_medium(*mf_bag[0], surface);
-                scene_->media.push_back(m);
-                scene_->add_shape(make_region_boundary(shape, *surface, m->shell_top(), m));
-            }
+            // Built by finish_regions, in parallel with the other media's.
+            pending_.push_back(PendingRegion{shape, mf_bag[0], kind == "gpis", nullptr, nullptr, nullptr});
             return;
         }
         if (t == "sdfgrid") return;  // (placeholders: the medium is not built, nothing to trace)

@@ -24,6 +24,9 @@ struct BuildOptions {
     int spp_override = -1;
     long long seed_override = -1;
     int max_depth_override = -2;  // -2 = keep the scene's value
+    /// Threads that build the media's mean surfaces and region boundaries (the costly part of
+    /// loading a scene with mesh media), 0 = hardware concurrency. The scene does not depend on it.
+    int threads = 0;
 };
 
 struct BuildReport {

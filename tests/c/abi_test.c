@@ -1299,7 +1299,8 @@ static void test_surfaces_and_tracking(void) {
     mf_track_query lq = q;
     lq.seed = seed;
     EXPECT_OK(mf_track_free_flight(m, liar, NULL, &hs, &lq, &c1));
-    CHECK(!c1.scattered || (c1.t >= 0 && c1.t <= 1 + top), "t = %g outside the segment", c1.t);
+    /* (the ray's chord through the region f < top, whose majorant the lie understates) */
+    CHECK(!c1.scattered || (c1.t >= 0 && c1.t <= 2 * (1 + top)), "t = %g outside the region", c1.t);
     violations += c1.stats.majorant_violations;
   }
   CHECK(violations > 0, "a lying bound must show as majorant violations");

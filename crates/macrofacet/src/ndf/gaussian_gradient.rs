@@ -35,6 +35,22 @@ pub(crate) enum Spread {
     Matrix(DMat3),
 }
 
+/// `E[max(0, w·g)]` for `w·g` of mean `w_z` and `s = sqrt(2)` times its standard deviation:
+/// `s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (seeds/000 Eq. 32's `a`), written with `erfcx`
+/// for `a < 0` so that grazing-from-below directions do not cancel. Increasing in `w_z` and in `s`.
+pub(crate) fn expected_positive_part(w_z: f64, s: f64) -> f64 {
+    if s == 0.0 {
+        return w_z.max(0.0);
+    }
+    let a = w_z / s;
+    let p = if a >= 0.0 {
+        0.5 * a * erfc(-a) + 0.5 * FRAC_1_SQRT_PI * (-a * a).exp()
+    } else {
+        0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI + a * erfcx(-a))
+    };
+    s * p
+}
+
 impl GaussianGradient {
     pub fn diagonal(alpha: DVec3) -> Self {
         GaussianGradient { spread: Spread::Diagonal(alpha) }
@@ -69,17 +85,7 @@ impl GaussianGradient {
     /// `E[max(0, w·g)] = s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (seeds/000 Eq. 32's `a`). Written
     /// with `erfcx` for `a < 0` so that grazing-from-below directions do not cancel.
     pub fn projected_area(&self, w: DVec3) -> f64 {
-        let s = self.s(w);
-        if s == 0.0 {
-            return w.z.max(0.0);
-        }
-        let a = w.z / s;
-        let p = if a >= 0.0 {
-            0.5 * a * erfc(-a) + 0.5 * FRAC_1_SQRT_PI * (-a * a).exp()
-        } else {
-            0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI + a * erfcx(-a))
-        };
-        s * p
+        expected_positive_part(w.z, self.s(w))
     }
 
     /// Exact sample of the visible normals from `wi`. `u[0]` drives the 1-D density along `L wi`,

@@ -8,7 +8,7 @@
 //! local tangent `x` and bitangent `y`): `alpha_x` = `alpha_u`, `alpha_y` = `alpha_v`.
 
 use super::beckmann::Beckmann;
-use super::gaussian_gradient::GaussianGradient;
+use super::gaussian_gradient::{expected_positive_part, GaussianGradient};
 use super::MicrofacetDistribution;
 use crate::error::Result;
 use crate::limits::{check_alpha_z, check_roughness};
@@ -39,6 +39,24 @@ impl Gpss {
 
     fn gradient(&self) -> GaussianGradient {
         GaussianGradient::diagonal(DVec3::new(self.alpha_x, self.alpha_y, self.alpha_z))
+    }
+
+    /// Upper and lower bounds of the projected area over every direction `w` with `w_z` in
+    /// `[z[0], z[1]]`, for `alpha_x = alpha_y` (`None` otherwise): `E[max(0, w·g)]` grows with
+    /// the mean `w_z` of `w·g` and with its spread `s(w)` (seeds/000 Eq. 32), and
+    /// `s² = alpha_z² + (alpha² − alpha_z²)(1 − w_z²)` is monotone in `w_z²`. So each bound is one
+    /// evaluation at the range's extreme `w_z` and extreme spread, with no Lipschitz margin.
+    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
+        if self.alpha_x != self.alpha_y {
+            return None;
+        }
+        let sin2 = |c: f64| ((1.0 - c) * (1.0 + c)).clamp(0.0, 1.0);
+        let sin2_max = if z[0] <= 0.0 && z[1] >= 0.0 { 1.0 } else { sin2(z[0]).max(sin2(z[1])) };
+        let sin2_min = sin2(z[0]).min(sin2(z[1]));
+        let (a2, az2) = (self.alpha_x * self.alpha_x, self.alpha_z * self.alpha_z);
+        let s = |sin2: f64| (az2 + (a2 - az2) * sin2).max(0.0).sqrt();
+        let (s_hi, s_lo) = if a2 >= az2 { (s(sin2_max), s(sin2_min)) } else { (s(sin2_min), s(sin2_max)) };
+        Some((expected_positive_part(z[1], s_hi), expected_positive_part(z[0], s_lo)))
     }
 
     /// The height-field limit with the same in-plane roughness (used by the seeds/000 Eq. 40 mixture).

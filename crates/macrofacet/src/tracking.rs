@@ -141,13 +141,11 @@ impl ProjectedAreaBounds {
     }
 
     fn bound(&self, ndf: &Ndf, cos: [f64; 2], side: f64) -> f64 {
-        // Isotropic Gaussian gradients: monotone in w_z = −d·n and in the spread, so exact at
-        // the range's extremes (the range widened by σ_t's rounding of d·n, COS_ROUNDING).
-        if let Ndf::Gpss(gpss) = ndf {
-            let w_z = [(-cos[1] - COS_ROUNDING).max(-1.0), (-cos[0] + COS_ROUNDING).min(1.0)];
-            if let Some((upper, lower)) = gpss.projected_area_range(w_z) {
-                return if side > 0.0 { upper } else { lower };
-            }
+        // Closed forms monotone over w_z = −d·n (and the spread): exact at the range's extremes,
+        // the range widened by σ_t's rounding of d·n (COS_ROUNDING).
+        let w_z = [(-cos[1] - COS_ROUNDING).max(-1.0), (-cos[0] + COS_ROUNDING).min(1.0)];
+        if let Some((upper, lower)) = ndf.projected_area_range(w_z) {
+            return if side > 0.0 { upper } else { lower };
         }
         let area = |theta: f64| {
             let (sin, cos) = theta.sin_cos();

@@ -210,6 +210,20 @@ fn gpss_projected_area_range_bounds_every_direction_of_the_range() {
         }
     }
     assert!(Gpss::new(0.3, 0.2, 0.1).unwrap().projected_area_range([0.0, 1.0]).is_none());
+    // GGX up to α = 1 (the area grows with w_z) and Beckmann (gpss with α_z = 0): the same.
+    for ndf in [Ndf::Ggx(Ggx::new(0.2, 0.2).unwrap()), Ndf::Ggx(Ggx::new(1.0, 1.0).unwrap()), Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), Ndf::Beckmann(Beckmann::new(3.0, 3.0).unwrap())] {
+        for _ in 0..200 {
+            let (a, b) = (2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
+            let z = [a.min(b), a.max(b)];
+            let (upper, lower) = ndf.projected_area_range(z).unwrap();
+            for k in 0..=64 {
+                let w_z = z[0] + (z[1] - z[0]) * k as f64 / 64.0;
+                let area = ndf.projected_area(DVec3::new((1.0 - w_z * w_z).max(0.0).sqrt(), 0.0, w_z));
+                assert!(area <= upper * (1.0 + 1e-12) && area >= lower * (1.0 - 1e-12), "{ndf:?}, w_z {w_z} in {z:?}: {area} outside [{lower}, {upper}]");
+            }
+        }
+    }
+    assert!(Ndf::Ggx(Ggx::new(1.5, 1.5).unwrap()).projected_area_range([0.0, 1.0]).is_none());
 }
 
 #[test]

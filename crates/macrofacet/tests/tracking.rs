@@ -776,15 +776,31 @@ fn sdf_grids_that_are_not_distances_are_refused() {
     }
 }
 
-/// The exact projected-area bounds of isotropic gpss media (`Gpss::projected_area_range`, no
-/// Lipschitz margin) hold at every tentative collision: 100,000 rays per medium from random
-/// points of a sphere's shell in random directions, free flights (majorant) and transmittance
-/// (majorant and control), height field to volume-like, α_z below, equal to and above α.
+/// The exact projected-area bounds of isotropic gpss, Beckmann and GGX media
+/// (`Ndf::projected_area_range`, no Lipschitz margin) hold at every tentative collision: 100,000
+/// rays per medium from random points of a sphere's shell in random directions, free flights
+/// (majorant) and transmittance (majorant and control); gpss from height field to volume-like
+/// with α_z below, equal to and above α, GGX up to α = 1 (and beyond, where the Lipschitz bound
+/// takes over).
 #[test]
-fn gpss_area_bounds_hold_for_random_rays_around_a_sphere() {
+fn closed_form_area_bounds_hold_for_random_rays_around_a_sphere() {
     let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
-    for (sigma, alpha, az) in [(0.005, 0.1, 0.1), (0.02, 0.4, 0.4), (0.005, 0.1, 0.0), (0.05, 1.0, 1.0), (0.02, 0.4, 0.2), (0.02, 0.2, 0.8)] {
-        let m = medium(Ndf::Gpss(Gpss::new(alpha, alpha, az).unwrap()), sigma);
+    let gpss = |a: f64, az: f64| Ndf::Gpss(Gpss::new(a, a, az).unwrap());
+    let cases = [
+        (0.005, gpss(0.1, 0.1)),
+        (0.02, gpss(0.4, 0.4)),
+        (0.005, gpss(0.1, 0.0)),
+        (0.05, gpss(1.0, 1.0)),
+        (0.02, gpss(0.4, 0.2)),
+        (0.02, gpss(0.2, 0.8)),
+        (0.01, Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap())),
+        (0.01, Ndf::Beckmann(Beckmann::new(2.0, 2.0).unwrap())),
+        (0.01, Ndf::Ggx(macrofacet::ndf::Ggx::new(0.2, 0.2).unwrap())),
+        (0.01, Ndf::Ggx(macrofacet::ndf::Ggx::new(1.0, 1.0).unwrap())),
+        (0.01, Ndf::Ggx(macrofacet::ndf::Ggx::new(3.0, 3.0).unwrap())),
+    ];
+    for (sigma, ndf) in cases {
+        let m = medium(ndf, sigma);
         let tracker = Tracker::new(&m, &sphere);
         let mut stats = TrackStats::default();
         let mut rng = Pcg32::new(5, 0);
@@ -803,6 +819,6 @@ fn gpss_area_bounds_hold_for_random_rays_around_a_sphere() {
             tracker.transmittance(p, d, 10.0, &mut r, &mut stats).unwrap();
         }
         assert!(stats.tentative_collisions > 50_000);
-        assert_eq!(stats.majorant_violations, 0, "sigma {sigma}, alpha {alpha}, alpha_z {az}: {stats:?}");
+        assert_eq!(stats.majorant_violations, 0, "sigma {sigma}, {ndf:?}: {stats:?}");
     }
 }

@@ -2,6 +2,7 @@
 //! GPSS with a squared-exponential kernel and `l_z = ∞` (so `alpha_z = 0`).
 
 use super::gaussian_gradient::GaussianGradient;
+use super::gpss::Gpss;
 use super::MicrofacetDistribution;
 use crate::error::Result;
 use crate::limits::check_roughness;
@@ -24,6 +25,14 @@ impl Beckmann {
 
     pub(super) fn gradient(&self) -> GaussianGradient {
         GaussianGradient::diagonal(DVec3::new(self.alpha_u, self.alpha_v, 0.0))
+    }
+}
+
+impl Beckmann {
+    /// [`Gpss::projected_area_range`] with `alpha_z = 0`: the Beckmann projected area is the
+    /// gpss one of a height field (the same code, [`GaussianGradient`]).
+    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
+        Gpss { alpha_x: self.alpha_u, alpha_y: self.alpha_v, alpha_z: 0.0 }.projected_area_range(z)
     }
 }
 

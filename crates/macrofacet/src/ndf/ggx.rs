@@ -24,6 +24,19 @@ impl Ggx {
     }
 }
 
+impl Ggx {
+    /// Upper and lower bounds of the projected area over every direction `w` with `w_z` in
+    /// `[z[0], z[1]]`, for `alpha_u = alpha_v <= 1` (`None` otherwise): the area
+    /// `(w_z + sqrt(α² + (1 − α²) w_z²))/2` then grows with `w_z`, so the range's ends bound it.
+    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
+        if self.alpha_u != self.alpha_v || self.alpha_u > 1.0 {
+            return None;
+        }
+        let at = |z: f64| self.projected_area(DVec3::new(((1.0 - z) * (1.0 + z)).max(0.0).sqrt(), 0.0, z));
+        Some((at(z[1]), at(z[0])))
+    }
+}
+
 impl MicrofacetDistribution for Ggx {
     /// `D(m) = 1 / (π α_u α_v (m_x²/α_u² + m_y²/α_v² + m_z²)²)` for `m_z > 0`.
     fn d(&self, m: DVec3) -> f64 {

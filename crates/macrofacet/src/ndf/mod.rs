@@ -240,6 +240,18 @@ impl Ndf {
         }
     }
 
+    /// Upper and lower bounds of the projected area over every direction with `w_z` in
+    /// `[z[0], z[1]]`, where a closed form makes them exact (isotropic gpss and Beckmann; GGX up
+    /// to `α = 1`); `None` otherwise.
+    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
+        match self {
+            Ndf::Gpss(g) => g.projected_area_range(z),
+            Ndf::Beckmann(b) => b.projected_area_range(z),
+            Ndf::Ggx(g) => g.projected_area_range(z),
+            _ => None,
+        }
+    }
+
     /// True when [`MicrofacetDistribution::projected_area`] is the projected area of `D` (false
     /// for GTR with Dimov's Λ), so that a phase sample's `eval/pdf` is the flake's reflectance.
     pub fn lambda_is_projected_area(&self) -> bool {

@@ -144,3 +144,27 @@ fn visible_normal_sample_with_a_long_frame_normal_has_positive_pdf() {
     assert!(!s.valid || s.pdf > 0.0, "{s:?}");
     unsafe { mf_ndf_free(n) };
 }
+
+/// `fuzz/artifacts/ndf/crash-4d1d8869fd79689bd673c53a972149b6f06ebf78`: GTR (γ = 0.235, Dimov's
+/// Λ) with α_u = 0.131, α_v = 1.1e-4, `w` along the tangent plane with `w_z = −1e-320`
+/// (subnormal): `Λ(w) + Λ(−w)` was −1.0074, not −1 (seeds/000 Eq. 39), because both were
+/// quotients of areas that had lost their digits. Below the horizon Λ now comes from the
+/// identity, for every distribution and every `w_z`.
+#[test]
+fn lambda_identity_holds_at_subnormal_cosines() {
+    let gtr = ndf(&[("gamma", 2.3529411781422027e-1), ("alpha_u", 1.3105453383053872e-1), ("alpha_v", 1.1347556922028417e-4)], &[("distribution", "gtr"), ("lambda", "dimov")]);
+    let beckmann = ndf(&[("alpha", 0.3)], &[]);
+    let frame = mf_frame { normal: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, tangent: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
+    for n in [gtr, beckmann] {
+        for z in [-1e-320f64, -5e-324, -1e-310, -1e-300, -1e-100, -1e-16, -1e-8, -0.3] {
+            let w = mf_vec3 { x: 0.0, y: (1.0 - z * z).sqrt(), z };
+            let (mut below, mut above) = (f64::NAN, f64::NAN);
+            assert_eq!(unsafe { mf_ndf_lambda(n, &frame, w, &mut below) }, mf_status::MF_OK);
+            assert_eq!(unsafe { mf_ndf_lambda(n, &frame, mf_vec3 { x: -w.x, y: -w.y, z: -w.z }, &mut above) }, mf_status::MF_OK);
+            if below.is_finite() && above.is_finite() {
+                assert!((below + above + 1.0).abs() <= 1e-9 * below.abs().max(1.0), "w_z {z:e}: Λ(w) + Λ(−w) = {below} + {above}");
+            }
+        }
+        unsafe { mf_ndf_free(n) };
+    }
+}

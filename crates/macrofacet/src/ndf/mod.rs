@@ -52,8 +52,14 @@ pub trait MicrofacetDistribution {
     }
 
     /// Smith's `Lambda(w)`, extended to the whole sphere. Infinite at the horizon.
-    /// Identity used: `Lambda(w) cos θ_w = projected_area(-w)` (seeds/000 Eq. 8 with `d = w`).
+    /// Identity used: `Lambda(w) cos θ_w = projected_area(-w)` (seeds/000 Eq. 8 with `d = w`);
+    /// below the horizon through `Λ(w) = −1 − Λ(−w)` (seeds/000 Eq. 39), which the two quotients
+    /// break where `w_z` is subnormal and both areas lose their digits (found by fuzzing: GTR at
+    /// `w_z = −1e-320` gave a sum of −1.0074).
     fn lambda(&self, w: DVec3) -> f64 {
+        if w.z < 0.0 {
+            return -1.0 - self.projected_area(w) / -w.z;
+        }
         self.projected_area(-w) / w.z
     }
 

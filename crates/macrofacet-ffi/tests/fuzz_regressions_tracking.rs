@@ -624,3 +624,33 @@ fn enclosure_far_from_the_origin_contains_the_region() {
         mf_surface_free(sphere);
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-092b236ee5dc608bc5e4cee661535aa36e9f3217`: Beckmann at
+/// α = 1e6 (σ = 1e-50), a tetrahedron 3e-46 wide, a ray from its top vertex region up along the
+/// normal. The frame normals near an edge, `(q − c)/|q − c|` at 2.5e-56 from it, are rounded by
+/// ~1e-5 rad (coordinates 3e-46 over the distance), beyond the segment bound's `d·n` range
+/// (padded by 1e-12): `d·n` = 1 − 3e-16 against a range ending at 1 − 5.8e-12, where this lobe's
+/// back-facing area is 0 while the exact lower bound (`Ndf::projected_area_range`) was 0.54:
+/// the control exceeded `σ_t` in 896 of 2001 transmittance calls. The mesh's range now widens by
+/// that rounding at the piece's smallest distance (`src/surface/mesh/mod.rs`).
+#[test]
+fn mesh_normal_rounding_stays_inside_the_bound() {
+    let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730953e-56)], &[("distribution", "beckmann")]);
+    let (positions, indices) = tetrahedron(2.999998978784814e-46);
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let origin = mf_vec3 { x: 0.0, y: 0.0, z: 2.999998978781814e-46 };
+    let d = mf_vec3 { x: -1.9883817500012286e-6, y: 1.0334886555964507e-6, z: 0.9999999999974891 };
+    let (mut v_ff, mut v_t) = (0, 0);
+    for seed in (0..2000).chain([42887017611264]) {
+        let q = mf_track_query { origin, d, t_max: 1.2118579560936542e-45, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        assert_eq!(unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
+        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+        assert_eq!(unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
+        v_ff += unsafe { c.assume_init() }.stats.majorant_violations;
+        v_t += t.stats.majorant_violations;
+    }
+    assert_eq!((v_ff, v_t), (0, 0), "majorant violations in free flights and transmittance");
+}

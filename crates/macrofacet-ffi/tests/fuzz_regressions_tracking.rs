@@ -654,3 +654,28 @@ fn mesh_normal_rounding_stays_inside_the_bound() {
     }
     assert_eq!((v_ff, v_t), (0, 0), "majorant violations in free flights and transmittance");
 }
+
+/// `fuzz/artifacts/fields/crash-9c10c3022f257d6fd3afebd0e1754e8cab12d672`: a field's anisotropy
+/// `Σ = diag(46.8, 1e-6, 1e-6)` at σ = 5.1e34 makes the roughness matrix `2σ²Σ⁻¹` reach
+/// α ≈ 7e37, and `mf_phase_eval_pdf_local` answered `eval = +inf` with MF_OK (`det(Q)^{3/2}`
+/// overflowed in D). A matrix whose roughness along the frame's axes exceeds 1e6 (the range of
+/// `alpha_u`, `alpha_v`, `alpha_z`) is now refused with the reason.
+#[test]
+fn anisotropy_beyond_the_roughness_range_is_refused() {
+    let m = medium(&[("sigma", 1e50), ("shell_extent", 1e-3), ("lengthscale", 1.4142135623730953e56)], &[("distribution", "gpss")]);
+    let local = mf_local_params {
+        set: 15,
+        sigma: 5.080228710492773e34,
+        alpha: mf_vec3 { x: 42.02709887639687, y: 999.9999999971164, z: 0.0 },
+        anisotropy: [46.83690999171263, 1e-6, 1e-6, 0.0, 0.0, 0.0],
+        reflectance_scale: mf_rgb { r: 0.6392156862745098, g: 0.6392156862745098, b: 0.6392156862745098 },
+    };
+    let frame = mf_frame { normal: mf_vec3 { x: -0.6158572565749079, y: -0.737018188584581, z: -0.2784313725490195 }, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 } };
+    let wi = frame.normal;
+    let mut v = mf_phase_value { value: mf_rgb { r: -7.0, g: -7.0, b: -7.0 }, pdf: -7.0 };
+    let status = unsafe { mf_phase_eval_pdf_local(m, &local, &frame, wi, wi, &mut v) };
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT, "{v:?}");
+    assert!(last_error().contains("roughness"), "{}", last_error());
+    assert_eq!(v.pdf, -7.0, "written on failure");
+    unsafe { mf_medium_free(m) };
+}

@@ -11,6 +11,7 @@
 use super::gaussian_gradient::{GaussianGradient, Spread};
 use super::MicrofacetDistribution;
 use crate::error::{Error, ErrorKind, Result};
+use crate::limits::ROUGHNESS_RANGE;
 use crate::special::{erfc, erfcx};
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
@@ -41,6 +42,14 @@ impl GpssMatrix {
         );
         if !q.is_finite() {
             return Err(bad(format!("the matrix must be finite, got {q}")));
+        }
+        // The roughness along the frame's axes (α² on Q's diagonal) within ROUGHNESS_RANGE, as
+        // for alpha_u, alpha_v and alpha_z: beyond it the normals no longer change, and D's
+        // det(Q)^{3/2} overflows near α ~ 1e34 (found by fuzzing: a field's anisotropy gave
+        // α ~ 1e37 and D = +inf).
+        let largest = q.x_axis.x.max(q.y_axis.y).max(q.z_axis.z);
+        if largest > ROUGHNESS_RANGE.1 * ROUGHNESS_RANGE.1 {
+            return Err(bad(format!("the roughness along the frame's axes reaches {:e}, above {:e}: the normals no longer change (α² = {largest:e} on the diagonal of {q})", largest.sqrt(), ROUGHNESS_RANGE.1)));
         }
         // Cholesky, lower: column j of K.
         let scale = q.x_axis.x.max(q.y_axis.y).max(q.z_axis.z);

@@ -168,3 +168,37 @@ fn lambda_identity_holds_at_subnormal_cosines() {
         unsafe { mf_ndf_free(n) };
     }
 }
+
+/// `fuzz/artifacts/ndf/crash-e1b26edcdf7524a61889997136180c2e1ea9354b`: GTR (γ = 3) with the
+/// transform `[[5e5, 2e155], [2e155, 5e5]]`: its determinant overflowed to −∞, which passed the
+/// invertibility check (`|det| > 1e-12 × scale²` with the product evaluated left to right), and
+/// `mf_ndf_eval` answered D = NaN with MF_OK at `m = −y` (`|Mᵀm|²` overflowed). Entries beyond
+/// ±1e12 are refused with the reason.
+#[test]
+fn overflowing_microsurface_transform_is_refused() {
+    let floats = [("gamma", 3.0), ("alpha", 9.99999999999e-5), ("transform_xx", 5e5), ("transform_xy", 2.0408163340358347e155), ("transform_yx", 2.040816332656715e155), ("transform_yy", 5e5)];
+    let (mut params, mut n) = (ptr::null_mut(), ptr::null_mut());
+    unsafe {
+        assert_eq!(mf_params_new(&mut params), mf_status::MF_OK);
+        for (name, x) in floats {
+            let name = CString::new(name).unwrap();
+            assert_eq!(mf_params_set_float(params, name.as_ptr(), x), mf_status::MF_OK);
+        }
+        for (name, s) in [("distribution", "gtr"), ("lambda", "dimov")] {
+            let (name, s) = (CString::new(name).unwrap(), CString::new(s).unwrap());
+            assert_eq!(mf_params_set_string(params, name.as_ptr(), s.as_ptr()), mf_status::MF_OK);
+        }
+        assert_ne!(mf_ndf_new(params, &mut n), mf_status::MF_OK);
+        assert!(n.is_null(), "nothing written on failure");
+        mf_params_free(params);
+    }
+    // The largest accepted entries evaluate to finite numbers.
+    let n = ndf(&[("gamma", 3.0), ("alpha", 1e-4), ("transform_xx", 5e5), ("transform_xy", 1e12), ("transform_yx", 1e12), ("transform_yy", 5e5)], &[("distribution", "gtr"), ("lambda", "dimov")]);
+    let frame = mf_frame { normal: mf_vec3 { x: 3.0486221039776374e-302, y: -9.367720411159655e-301, z: 3.486097148820466e-301 }, tangent: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 } };
+    for m in [mf_vec3 { x: -0.0, y: -1.0, z: -0.0 }, mf_vec3 { x: 0.6, y: -0.8, z: 0.0 }] {
+        let mut d = -1.0;
+        assert_eq!(unsafe { mf_ndf_eval(n, &frame, m, &mut d) }, mf_status::MF_OK);
+        assert!(d.is_finite() && d >= 0.0, "D = {d}");
+    }
+    unsafe { mf_ndf_free(n) };
+}

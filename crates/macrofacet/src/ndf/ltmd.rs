@@ -89,6 +89,10 @@ pub struct Ltmd {
     abs_det: f64,
 }
 
+/// The largest entry of a microsurface transform: it scales the base's slopes, and beyond it
+/// the roughness leaves every useful range while `|Mᵀm|⁴` in `D_M` nears overflow.
+const MAX_TRANSFORM_ENTRY: f64 = 1e12;
+
 impl Ltmd {
     /// `base` transformed by `transform`; `M` must be finite and invertible (the error names
     /// the parameter `transform`).
@@ -97,11 +101,13 @@ impl Ltmd {
         let scale = entries.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         let det = transform.determinant();
         // An (almost) singular M flattens the microsurface into a line: D_M is not a density.
-        if !entries.iter().all(|x| x.is_finite()) || !(det.abs() > 1e-12 * scale * scale) {
+        // Entries beyond MAX_TRANSFORM_ENTRY overflow D_M's |Mᵀm|⁴ (found by fuzzing: entries
+        // 2e155 passed with an infinite determinant, and D was NaN).
+        if !entries.iter().all(|x| x.is_finite()) || scale > MAX_TRANSFORM_ENTRY || !(det.abs() > 1e-12 * scale * scale) {
             return Err(Error::new(
                 ErrorKind::InvalidValue,
                 format!(
-                    "the microsurface transform (\"transform_xx\", \"transform_xy\", \"transform_yx\", \"transform_yy\") must be a finite invertible matrix, got xx = {}, xy = {}, yx = {}, yy = {} (determinant {det})",
+                    "the microsurface transform (\"transform_xx\", \"transform_xy\", \"transform_yx\", \"transform_yy\") must be a finite invertible matrix with entries within ±{MAX_TRANSFORM_ENTRY:e}, got xx = {}, xy = {}, yx = {}, yy = {} (determinant {det})",
                     entries[0], entries[2], entries[1], entries[3]
                 ),
             ));

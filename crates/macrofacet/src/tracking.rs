@@ -128,9 +128,11 @@ impl ProjectedAreaBounds {
     }
 
     /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent.
-    /// `σ(d) = projected_area(−d_local)` sees `w_z = −d·n`; over the angle interval an
-    /// L-Lipschitz function exceeds neither the larger end value by more than `L × width / 2`
-    /// nor the midpoint value by more than that (one evaluation for narrow ranges).
+    /// `σ(d) = projected_area(−d_local)` sees `w_z = −d·n`. Where a closed form is monotone
+    /// ([`Ndf::projected_area_range`]: isotropic gpss, Beckmann, GGX up to α = 1) the range's
+    /// extremes give it exactly; otherwise, over the angle interval, an L-Lipschitz function
+    /// exceeds neither the larger end value by more than `L × width / 2` nor the midpoint value
+    /// by more than that (one evaluation for narrow ranges).
     fn upper(&self, cos: [f64; 2]) -> f64 {
         self.bound(&self.upper, cos, 1.0) * (1.0 + AREA_ROUNDING)
     }

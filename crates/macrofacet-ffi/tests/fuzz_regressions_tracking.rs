@@ -679,3 +679,36 @@ fn anisotropy_beyond_the_roughness_range_is_refused() {
     assert_eq!(v.pdf, -7.0, "written on failure");
     unsafe { mf_medium_free(m) };
 }
+
+/// A host surface that answers `f = −∞` (a unit normal) everywhere: its callbacks lie.
+unsafe extern "C" fn minus_infinity_point(_: *mut std::ffi::c_void, _: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let z = mf_vec3 { x: 0.0, y: 0.0, z: 1.0 };
+    unsafe { *out = mf_surface_point { f: f64::NEG_INFINITY, normal: z, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/tracking/crash-b526ef07ad869586ea613edd9a7e0563d69a776f`: a callback surface
+/// in a box of 1e-3 whose `f` turns −∞, `mf_surface_enclosure` at level −1e308 with cells of
+/// 1e308: the grid's extent overflowed (the cell then became +∞), every block centre was NaN,
+/// and the enclosure's vertices were NaN, with MF_OK. A grid beyond the range of f64 is now
+/// refused with the reason, nothing written.
+#[test]
+fn enclosure_grid_beyond_f64_is_refused() {
+    let surface = callback_surface(minus_infinity_point, MF_SURFACE_GENERAL, mf_vec3 { x: -1e-3, y: -1e-3, z: -1e-3 }, mf_vec3 { x: 1e-3, y: 1e-3, z: 1e-3 });
+    for (level, cell) in [(-9.99947860136237e307, 9.999478601362363e307), (1e308, 0.0), (0.0, 1.7e308)] {
+        let mut enclosure = ptr::null_mut();
+        let status = unsafe { mf_surface_enclosure(surface, ptr::null_mut(), level, cell, &mut enclosure) };
+        if status == mf_status::MF_OK {
+            let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
+            assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
+            let mesh = unsafe { mesh.assume_init() };
+            let positions = unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) };
+            assert!(positions.iter().all(|x| x.is_finite()), "level {level:e}, cell {cell:e}: a vertex is not finite");
+            unsafe { mf_enclosure_free(enclosure) };
+        } else {
+            assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT, "level {level:e}, cell {cell:e}");
+            assert!(enclosure.is_null());
+        }
+    }
+    unsafe { mf_surface_free(surface) };
+}

@@ -431,7 +431,7 @@ impl SurfaceVisitor for BuildEnclosure {
 /// watertight, outward-facing, within one cell diagonal of the level set (L of them for an SDF
 /// grid whose interpolation is L-Lipschitz); made of grid cells of
 /// about `cell_size` (0: 1/128 of the surface's largest extent; at most 512 cells along an axis,
-/// at least 1e5 ulps of the largest coordinate).
+/// at least 1e5 ulps of the largest coordinate and 1e-53).
 /// Needs a surface with a finite bounding box.
 pub struct mf_enclosure {
     positions: Vec<f64>,

@@ -712,3 +712,39 @@ fn enclosure_grid_beyond_f64_is_refused() {
     }
     unsafe { mf_surface_free(surface) };
 }
+
+/// A host sphere of radius 0 at the origin, `f = |p|` computed plainly (its squares underflow for
+/// coordinates below ~1e-154, as a host's would).
+unsafe extern "C" fn point_sphere(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let n = if r > 0.0 { mf_vec3 { x: p.x / r, y: p.y / r, z: p.z / r } } else { mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
+    unsafe { *out = mf_surface_point { f: r, normal: n, tangent: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/tracking/crash-014cb22e01fc938cbd88de5efdc01fc41192bec3`: a point-like host
+/// sphere (radius 0), `mf_surface_enclosure` at level 2.2e-308 with cells of 7e-310: the corners
+/// lay where the host's squared distances underflow, so the host saw its own enclosure's
+/// vertices at f = 0, inside the region. Cells are now at least 1e-53 (1e-3 of the smallest
+/// sigma), where a host's f is exact to rounding.
+#[test]
+fn enclosure_cells_stay_above_underflow() {
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let surface = callback_surface(point_sphere, MF_SURFACE_CONVEX, zero, zero);
+    let level = 2.2250738585072014e-308;
+    let mut enclosure = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_enclosure(surface, ptr::null_mut(), level, 7.0363022809101e-310, &mut enclosure) }, mf_status::MF_OK, "{}", last_error());
+    let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
+    assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
+    let mesh = unsafe { mesh.assume_init() };
+    for v in unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) }.chunks_exact(3) {
+        // As the host sees it.
+        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
+        assert!(point.f >= level, "enclosure vertex {v:?} inside the region for the host: f = {:e} < level {level:e}", point.f);
+    }
+    unsafe {
+        mf_enclosure_free(enclosure);
+        mf_surface_free(surface);
+    }
+}

@@ -12,6 +12,7 @@
 
 use super::MeanSurface;
 use crate::error::{Error, ErrorKind, Result};
+use crate::limits::SIGMA_RANGE;
 use glam::{DVec3, IVec3};
 
 /// Fine cells per coarse block edge (a power of two: blocks halve down to cells).
@@ -20,6 +21,9 @@ const BLOCK: i32 = 8;
 const MAX_CELLS: f64 = 512.0;
 /// The smallest cell, in ulps of the largest coordinate (the cell grows below it).
 const MIN_CELL_ULPS: f64 = 1e5;
+/// The smallest cell at all: 1e-3 of the smallest `sigma` ([`SIGMA_RANGE`]), far above where
+/// squared distances underflow (~1e-154).
+const MIN_CELL: f64 = 1e-3 * SIGMA_RANGE.0;
 
 /// A triangle mesh: positions and counter-clockwise (seen from outside) triangles.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -50,8 +54,10 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     // Vertices `lo + g h` are rounded by a few ulps of the coordinates: cells of at least
     // MIN_CELL_ULPS of them keep that rounding within 1/50 of the hair below (found by fuzzing:
     // a sphere of radius 6e-36 at (0, 1, 2), where the cells were below an ulp).
+    // Nor below MIN_CELL, where the surface's squared distances underflow (found by fuzzing:
+    // a point-like sphere with cells of 7e-310 answered f = 0 at every corner).
     let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element() + level.max(0.0);
-    let mut h = (if cell > 0.0 { cell } else { extent / 128.0 }).max(MIN_CELL_ULPS * f64::EPSILON * magnitude);
+    let mut h = (if cell > 0.0 { cell } else { extent / 128.0 }).max(MIN_CELL_ULPS * f64::EPSILON * magnitude).max(MIN_CELL);
     let grow = level.max(0.0) + h;
     let (lo, hi) = (bounds.min - DVec3::splat(grow), bounds.max + DVec3::splat(grow));
     if (hi - lo).max_element() / h > MAX_CELLS {

@@ -461,6 +461,44 @@ fn callback_surface(point: unsafe extern "C" fn(*mut std::ffi::c_void, mf_vec3, 
     surface
 }
 
+/// Majorant violations of `mf_track_free_flight` and of `mf_track_transmittance` along one ray
+/// over `seeds` (every call must answer MF_OK).
+fn violations(m: *const mf_medium, surface: *const mf_surface, origin: mf_vec3, d: mf_vec3, t_max: f64, seeds: impl IntoIterator<Item = u64>) -> (u32, u32) {
+    let (mut free_flight, mut transmittance) = (0, 0);
+    for seed in seeds {
+        let q = mf_track_query { origin, d, t_max, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        assert_eq!(unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
+        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+        assert_eq!(unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
+        free_flight += unsafe { c.assume_init() }.stats.majorant_violations;
+        transmittance += t.stats.majorant_violations;
+    }
+    (free_flight, transmittance)
+}
+
+/// The vertices of `mf_surface_enclosure(surface, level, cell)` (which must answer MF_OK with
+/// triangles), each with the `f` that `mf_surface_eval` answers there.
+fn enclosure_vertices(surface: *const mf_surface, level: f64, cell: f64) -> Vec<([f64; 3], f64)> {
+    let mut enclosure = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_enclosure(surface, ptr::null_mut(), level, cell, &mut enclosure) }, mf_status::MF_OK, "{}", last_error());
+    let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
+    assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
+    let mesh = unsafe { mesh.assume_init() };
+    assert!(mesh.triangle_count > 0);
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let vertices = unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) }
+        .chunks_exact(3)
+        .map(|v| {
+            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+            assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
+            ([v[0], v[1], v[2]], point.f)
+        })
+        .collect();
+    unsafe { mf_enclosure_free(enclosure) };
+    vertices
+}
+
 /// `fuzz/artifacts/fields/crash-76e43ecab3d8a0691edf43c77d8aefb174925676`: gpss α = 1e-6,
 /// σ = 1e50, a flipped sphere of radius 3e49 and a ray 1.6e147 from its centre at
 /// d·n = 1.09e-5. There the projected area of the nearly smooth lobe is ~1e-58 and changes by
@@ -476,16 +514,8 @@ fn grazing_smooth_lobe_majorant_holds() {
     assert_eq!(unsafe { mf_surface_new_sphere(zero, 3.0000020598310863e49, true, pole, &mut sphere) }, mf_status::MF_OK);
     let origin = mf_vec3 { x: 40.0, y: -1.6489104643430374e147, z: 4.901960784313724 };
     let d = mf_vec3 { x: 0.7273426270154498, y: 1.0938525648383066e-5, z: 0.6862745098039216 };
-    let mut violations = 0;
-    for seed in 0..64 {
-        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed };
-        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
-        assert_eq!(unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
-        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
-        assert_eq!(unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
-        violations += unsafe { c.assume_init() }.stats.majorant_violations + t.stats.majorant_violations;
-    }
-    assert_eq!(violations, 0, "majorant violations over 64 seeds");
+    let (free_flight, transmittance) = violations(m, sphere, origin, d, f64::INFINITY, 0..64);
+    assert_eq!(free_flight + transmittance, 0, "majorant violations over 64 seeds");
     unsafe {
         mf_surface_free(sphere);
         mf_medium_free(m);
@@ -508,16 +538,8 @@ fn rough_lobe_along_the_normal_majorant_holds() {
     assert_eq!(unsafe { mf_surface_new_sphere(zero, 2.1878780977404597e-49, true, pole, &mut sphere) }, mf_status::MF_OK);
     let origin = mf_vec3 { x: 4.610608337288503e-56, y: -5.224316175345618e-71, z: -2.187878097740457e-48 };
     let d = mf_vec3 { x: 2.107344532887127e-8, y: -2.387848484363566e-23, z: -1.0000009999999997 };
-    let mut violations = 0;
-    for seed in (0..64).chain([u64::MAX]) {
-        let q = mf_track_query { origin, d, t_max: 2.1878780977404594e-48, seed };
-        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
-        assert_eq!(unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
-        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
-        assert_eq!(unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
-        violations += unsafe { c.assume_init() }.stats.majorant_violations + t.stats.majorant_violations;
-    }
-    assert_eq!(violations, 0, "majorant violations over 65 seeds");
+    let (free_flight, transmittance) = violations(m, sphere, origin, d, 2.1878780977404594e-48, (0..64).chain([u64::MAX]));
+    assert_eq!(free_flight + transmittance, 0, "majorant violations over 65 seeds");
     unsafe {
         mf_surface_free(sphere);
         mf_medium_free(m);
@@ -545,22 +567,10 @@ fn enclosure_of_a_steep_grid_contains_the_region() {
     let mut surface = ptr::null_mut();
     assert_eq!(unsafe { mf_surface_new_grid(&grid, &mut surface) }, mf_status::MF_OK, "{}", last_error());
     let level = 3.0000000000000002e50;
-    let mut enclosure = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_enclosure(surface, ptr::null_mut(), level, 8.468034533926575e49, &mut enclosure) }, mf_status::MF_OK, "{}", last_error());
-    let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
-    assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
-    let mesh = unsafe { mesh.assume_init() };
-    let positions = unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) };
-    for v in positions.chunks_exact(3) {
-        let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
-        assert!(point.f >= level, "enclosure vertex {v:?} inside the region: f = {:e} < level {level:e}", point.f);
+    for (v, f) in enclosure_vertices(surface, level, 8.468034533926575e49) {
+        assert!(f >= level, "enclosure vertex {v:?} inside the region: f = {f:e} < level {level:e}");
     }
-    unsafe {
-        mf_enclosure_free(enclosure);
-        mf_surface_free(surface);
-    }
+    unsafe { mf_surface_free(surface) };
 }
 
 /// `fuzz/artifacts/fields/crash-20276abe48ca25aaac6bbcda0ad3559e1626f4d4`: a gpss medium with
@@ -607,22 +617,10 @@ fn enclosure_far_from_the_origin_contains_the_region() {
     let pole = mf_vec3 { x: 0.0, y: -1.0, z: 0.0 };
     assert_eq!(unsafe { mf_surface_new_sphere(mf_vec3 { x: 0.0, y: 1.0, z: 2.0 }, 5.782903863735844e-36, false, pole, &mut sphere) }, mf_status::MF_OK);
     let level = 5.166912686415101e-35;
-    let mut enclosure = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_enclosure(sphere, ptr::null_mut(), level, 1.9996642309308483e-36, &mut enclosure) }, mf_status::MF_OK, "{}", last_error());
-    let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
-    assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
-    let mesh = unsafe { mesh.assume_init() };
-    assert!(mesh.triangle_count > 0);
-    for v in unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) }.chunks_exact(3) {
-        let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-        assert_eq!(unsafe { mf_surface_eval(sphere, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
-        assert!(point.f >= level, "enclosure vertex {v:?} inside the region: f = {:e} < level {level:e}", point.f);
+    for (v, f) in enclosure_vertices(sphere, level, 1.9996642309308483e-36) {
+        assert!(f >= level, "enclosure vertex {v:?} inside the region: f = {f:e} < level {level:e}");
     }
-    unsafe {
-        mf_enclosure_free(enclosure);
-        mf_surface_free(sphere);
-    }
+    unsafe { mf_surface_free(sphere) };
 }
 
 /// `fuzz/artifacts/tracking/crash-092b236ee5dc608bc5e4cee661535aa36e9f3217`: Beckmann at
@@ -642,17 +640,8 @@ fn mesh_normal_rounding_stays_inside_the_bound() {
     assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
     let origin = mf_vec3 { x: 0.0, y: 0.0, z: 2.999998978781814e-46 };
     let d = mf_vec3 { x: -1.9883817500012286e-6, y: 1.0334886555964507e-6, z: 0.9999999999974891 };
-    let (mut v_ff, mut v_t) = (0, 0);
-    for seed in (0..2000).chain([42887017611264]) {
-        let q = mf_track_query { origin, d, t_max: 1.2118579560936542e-45, seed };
-        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
-        assert_eq!(unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
-        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
-        assert_eq!(unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
-        v_ff += unsafe { c.assume_init() }.stats.majorant_violations;
-        v_t += t.stats.majorant_violations;
-    }
-    assert_eq!((v_ff, v_t), (0, 0), "majorant violations in free flights and transmittance");
+    let counts = violations(m, surface, origin, d, 1.2118579560936542e-45, (0..2000).chain([42887017611264]));
+    assert_eq!(counts, (0, 0), "majorant violations in free flights and transmittance");
 }
 
 /// `fuzz/artifacts/fields/crash-9c10c3022f257d6fd3afebd0e1754e8cab12d672`: a field's anisotropy
@@ -732,19 +721,9 @@ fn enclosure_cells_stay_above_underflow() {
     let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
     let surface = callback_surface(point_sphere, MF_SURFACE_CONVEX, zero, zero);
     let level = 2.2250738585072014e-308;
-    let mut enclosure = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_enclosure(surface, ptr::null_mut(), level, 7.0363022809101e-310, &mut enclosure) }, mf_status::MF_OK, "{}", last_error());
-    let mut mesh = std::mem::MaybeUninit::<mf_mesh>::uninit();
-    assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
-    let mesh = unsafe { mesh.assume_init() };
-    for v in unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) }.chunks_exact(3) {
-        // As the host sees it.
-        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
-        assert!(point.f >= level, "enclosure vertex {v:?} inside the region for the host: f = {:e} < level {level:e}", point.f);
+    // f as the host sees it.
+    for (v, f) in enclosure_vertices(surface, level, 7.0363022809101e-310) {
+        assert!(f >= level, "enclosure vertex {v:?} inside the region for the host: f = {f:e} < level {level:e}");
     }
-    unsafe {
-        mf_enclosure_free(enclosure);
-        mf_surface_free(surface);
-    }
+    unsafe { mf_surface_free(surface) };
 }

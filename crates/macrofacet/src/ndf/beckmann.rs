@@ -26,9 +26,7 @@ impl Beckmann {
     pub(super) fn gradient(&self) -> GaussianGradient {
         GaussianGradient::diagonal(DVec3::new(self.alpha_u, self.alpha_v, 0.0))
     }
-}
 
-impl Beckmann {
     /// [`Gpss::projected_area_range`] with `alpha_z = 0`: the Beckmann projected area is the
     /// gpss one of a height field (the same code, [`GaussianGradient`]).
     pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {

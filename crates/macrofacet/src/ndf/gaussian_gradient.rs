@@ -82,8 +82,7 @@ impl GaussianGradient {
         }
     }
 
-    /// `E[max(0, w·g)] = s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (seeds/000 Eq. 32's `a`). Written
-    /// with `erfcx` for `a < 0` so that grazing-from-below directions do not cancel.
+    /// `E[max(0, w·g)]`: [`expected_positive_part`] of `w_z` and `s(w)`.
     pub fn projected_area(&self, w: DVec3) -> f64 {
         expected_positive_part(w.z, self.s(w))
     }

@@ -22,9 +22,7 @@ impl Ggx {
     fn stretch(&self) -> DVec3 {
         DVec3::new(self.alpha_u, self.alpha_v, 1.0)
     }
-}
 
-impl Ggx {
     /// Upper and lower bounds of the projected area over every direction `w` with `w_z` in
     /// `[z[0], z[1]]`, for `alpha_u = alpha_v <= 1` (`None` otherwise): the area
     /// `(w_z + sqrt(α² + (1 − α²) w_z²))/2` then grows with `w_z`, so the range's ends bound it.

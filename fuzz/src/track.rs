@@ -97,7 +97,7 @@ impl Scene<'_> {
     /// One free flight with its property; `honest`: no majorant violation.
     pub fn free_flight(&mut self, q: &mf_track_query) -> Option<mf_collision> {
         let (m, s, f) = (self.medium.0 as *const mf_medium, self.surface.0 as *const mf_surface, self.field_ptr());
-        let c = self.with_host("mf_track_free_flight", |u| check::call(|o| unsafe { mf_track_free_flight(m, s, f, u, q, o) })).ok()?;
+        let c = self.with_host("mf_track_free_flight", |u| check::call(|o| unsafe { mf_track_free_flight(m, s, f, u, q, o) })).map_err(|e| { if debug() { eprintln!("free flight error {e:?}: {}", check::last_error()); } }).ok()?;
         if debug() {
             eprintln!("collision: {c:?}");
         }
@@ -109,7 +109,7 @@ impl Scene<'_> {
     /// One transmittance estimate with its property.
     pub fn transmittance(&mut self, q: &mf_track_query) -> Option<mf_transmittance> {
         let (m, s, f) = (self.medium.0 as *const mf_medium, self.surface.0 as *const mf_surface, self.field_ptr());
-        let t = self.with_host("mf_track_transmittance", |u| check::call(|o| unsafe { mf_track_transmittance(m, s, f, u, q, o) })).ok()?;
+        let t = self.with_host("mf_track_transmittance", |u| check::call(|o| unsafe { mf_track_transmittance(m, s, f, u, q, o) })).map_err(|e| { if debug() { eprintln!("transmittance error {e:?}: {}", check::last_error()); } }).ok()?;
         if debug() {
             eprintln!("transmittance: {t:?}");
         }

@@ -727,3 +727,55 @@ fn enclosure_cells_stay_above_underflow() {
     }
     unsafe { mf_surface_free(surface) };
 }
+
+/// `fuzz/corpus/tracking/b7f8d8b1…` (1.2 s per run): σ = 1e-50, Beckmann α = 1e-6, a ray deep
+/// inside an octahedron of size 1000 (f ≈ −497), moving outward, where the majorant is 0. Each
+/// empty segment asks for twice its length, but the tracker halved it back for looseness that
+/// was the mesh's padding for rounding (2e-9, the same at any length): it crept on by 1e-50 and
+/// failed after 65,536 segments. A halving that does not tighten the bound is now undone.
+#[test]
+fn empty_segments_deep_inside_a_mesh_grow() {
+    let m = medium(&[("sigma", 1e-50), ("shell_extent", 9.99999999999e-4), ("alpha", 1e-6)], &[("distribution", "beckmann")]);
+    let a = 1000.0000000010001;
+    let positions = [a, 0.0, 0.0, -a, 0.0, 0.0, 0.0, a, 0.0, 0.0, -a, 0.0, 0.0, 0.0, a, 0.0, 0.0, -a];
+    let normals = positions.map(|x| x / a);
+    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: normals.as_ptr(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let q = mf_track_query { origin: mf_vec3 { x: -0.0002730159346467071, y: 0.00025508563872220756, z: 138.41286895550982 }, d: mf_vec3 { x: 0.0, y: 1.0, z: 0.0 }, t_max: 78.1264188243673, seed: 16276397599167177057 };
+    let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+    let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
+    assert_eq!(status, mf_status::MF_OK, "{}", last_error());
+    let c = unsafe { c.assume_init() };
+    // 510 segments since the fix (the doublings from 1e-50 to 78, with their halvings undone).
+    assert!(c.stats.segments < 2000, "{:?}", c.stats);
+    let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+    assert_eq!(unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
+    assert!(t.stats.segments < 2000 && (0.0..=1.0).contains(&t.transmittance), "{t:?}");
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}
+
+/// `fuzz/corpus/tracking/4863559a…`: σ = 1e50, gpss α = 1e-6 around a flipped unit sphere, a ray
+/// from z = −4.9e64 along +z. At t = 2.8e64 the segment was shortened to 5.7e36, below the
+/// rounding of t (5.8e48): the ray could not move, and every one of the 65,536 segments was the
+/// same. Such a call now stops at the first one, saying why.
+#[test]
+fn segment_below_the_rounding_of_t_stops_the_call() {
+    let m = medium(&[("sigma", 1e50), ("lengthscale", 1.4142135623730953e56)], &[("distribution", "gpss")]);
+    let c = 1.000000000000001;
+    let mut sphere = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_sphere(mf_vec3 { x: c, y: c, z: c }, c, true, mf_vec3 { x: c, y: c, z: c }, &mut sphere) }, mf_status::MF_OK);
+    let q = mf_track_query { origin: mf_vec3 { x: c, y: -1.4810521216686835e-267, z: -4.8587479139867144e64 }, d: mf_vec3 { x: 0.0003564864423334052, y: 0.0, z: 0.9999999364587062 }, t_max: f64::INFINITY, seed: 0 };
+    let mut flight = std::mem::MaybeUninit::<mf_collision>::uninit();
+    let status = unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, flight.as_mut_ptr()) };
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT);
+    assert!(last_error().contains("stalled at t = 2.8"), "{}", last_error());
+    unsafe {
+        mf_surface_free(sphere);
+        mf_medium_free(m);
+    }
+}

@@ -11,6 +11,7 @@
 //! collision where the bound failed.
 
 use crate::error::{check_positive, Error, ErrorKind, Result};
+use crate::limits::{ROUGHNESS_RANGE, SIGMA_RANGE};
 use crate::frame::Frame;
 use crate::height::HeightProfile;
 use crate::ndf::{Beckmann, BeckmannUniformMixture, Ggx, Gpss, GpssMatrix, Ltmd, LtmdBase, Ndf};
@@ -80,17 +81,27 @@ impl MediumField for Constant {
 }
 
 impl ParamBounds {
-    /// Checks what a field returned (`what` names it in the message).
-    pub fn validate(&self, what: &str) -> Result<()> {
-        for (name, range, zero_ok) in [("sigma", self.sigma, false), ("alpha", self.alpha, true)] {
-            if let Some([lo, hi]) = range {
-                let ok = lo.is_finite() && hi.is_finite() && lo <= hi && if zero_ok { lo >= 0.0 } else { lo > 0.0 };
-                if !ok {
-                    return Err(Error::new(ErrorKind::InvalidArgument, format!("{what}: {name} bounds must be finite and ordered with {name} {} 0, got [{lo}, {hi}]", if zero_ok { ">=" } else { ">" })));
-                }
+    /// Checks what a field returned (`what` names it in the message) and clips it to the
+    /// parameters' domain ([`SIGMA_RANGE`], [`ROUGHNESS_RANGE`]): a value beyond is refused where
+    /// the field is evaluated, so the majorant need not cover it. Bounds that leave no value of
+    /// the domain are refused at once (found by fuzzing: a field declaring α in [5e264, 1e265]
+    /// went through 131,072 tentative collisions, as ratio tracking's thinning never asked it
+    /// for a value, before the call failed).
+    pub fn validated(self, what: &str) -> Result<ParamBounds> {
+        let mut clipped = self;
+        for (name, range, zero_ok, domain, out) in [("sigma", self.sigma, false, SIGMA_RANGE, &mut clipped.sigma), ("alpha", self.alpha, true, ROUGHNESS_RANGE, &mut clipped.alpha)] {
+            let Some([lo, hi]) = range else { continue };
+            let ok = lo.is_finite() && hi.is_finite() && lo <= hi && if zero_ok { lo >= 0.0 } else { lo > 0.0 };
+            if !ok {
+                return Err(Error::new(ErrorKind::InvalidArgument, format!("{what}: {name} bounds must be finite and ordered with {name} {} 0, got [{lo}, {hi}]", if zero_ok { ">=" } else { ">" })));
             }
+            if hi < domain.0 || lo > domain.1 {
+                return Err(Error::new(ErrorKind::InvalidArgument, format!("{what}: {name} bounds [{lo:e}, {hi:e}] leave no value of the accepted range [{:e}, {:e}]", domain.0, domain.1)));
+            }
+            // α's lower bound may be 0 (α_z of a height field): only its upper one is clipped.
+            *out = Some([if zero_ok { lo } else { lo.max(domain.0) }, hi.min(domain.1)]);
         }
-        Ok(())
+        Ok(clipped)
     }
 
     /// `M` with `ρ(f; σ) <= M ρ(f; σ_hi)` for every `f` and every `σ ∈ [σ_lo, σ_hi]`:

@@ -651,6 +651,46 @@ fn a_field_of_the_medium_s_own_values_changes_nothing() {
     }
 }
 
+/// A field that declares fixed bounds and answers `sigma` everywhere.
+struct Declared(ParamBounds, f64);
+impl MediumField for Declared {
+    fn at(&self, _: DVec3, _: &macrofacet::surface::SurfacePoint) -> macrofacet::Result<LocalParams> {
+        Ok(LocalParams { sigma: Some(self.1), ..Default::default() })
+    }
+    fn bounds(&self, _: DVec3, _: DVec3, _: f64) -> macrofacet::Result<ParamBounds> {
+        Ok(self.0)
+    }
+    fn sigma_max(&self) -> Option<f64> {
+        Some(self.1)
+    }
+}
+
+#[test]
+fn field_bounds_beyond_the_parameter_domain() {
+    // fuzz/artifacts (fields, timeout-c7e829a2…): a field declaring α in [5.4e264, 1.1e265]
+    // put a projected area of ~1e265 into the majorant; the transmittance's thinning never asked
+    // the field for a value and the call failed after 131,072 tentative collisions. Bounds with
+    // no value of the domain now fail at the first segment, with the reason; bounds reaching
+    // beyond it are clipped (values there are refused where the field is evaluated).
+    let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
+    let m = medium(Ndf::Gpss(Gpss::new(0.3, 0.3, 0.0).unwrap()), 0.05);
+    let (o, d) = (DVec3::new(-3.0, 0.1, 0.0), DVec3::X);
+    for (bounds, needle) in [
+        (ParamBounds { sigma: Some([0.05, 0.05]), alpha: Some([5.4e264, 1.1e265]) }, "alpha bounds [5.4e264, 1.1e265] leave no value"),
+        (ParamBounds { sigma: Some([2e50, 3e50]), alpha: None }, "sigma bounds [2e50, 3e50] leave no value"),
+    ] {
+        let field = Declared(bounds, 0.05);
+        let tracker = Tracker::with_field(&m, &sphere, &field);
+        let mut stats = TrackStats::default();
+        let e = tracker.transmittance(o, d, 6.0, &mut Pcg32::new(1, 2), &mut stats).unwrap_err();
+        assert!(e.message.contains(needle), "{}", e.message);
+        assert_eq!(stats.tentative_collisions, 0, "{stats:?}");
+    }
+    // Bounds reaching beyond the domain are clipped to it (α_lo may be 0: α_z of a height field).
+    let clipped = ParamBounds { sigma: Some([1e-60, 0.05]), alpha: Some([0.0, 1e9]) }.validated("test").unwrap();
+    assert_eq!((clipped.sigma, clipped.alpha), (Some([1e-50, 0.05]), Some([0.0, 1e6])));
+}
+
 #[test]
 fn surface_points_carry_mitsuba_uv() {
     // Issue 12: fields painted over the mean surface read Mitsuba's uv at the closest point —
@@ -762,11 +802,14 @@ fn sdf_grids_that_are_not_distances_are_refused() {
     let mut hole = ones.clone();
     hole[13] = -1.0; // the centre: a valid surface
     assert!(GridSurface::new(&hole, [3, 3, 3], glam::DMat3::IDENTITY, DVec3::ZERO).is_ok());
-    let cases: [(&str, Vec<f32>, [usize; 3], glam::DMat3); 6] = [
+    let cases: [(&str, Vec<f32>, [usize; 3], glam::DMat3); 7] = [
         ("dimensions", hole.clone(), [1, 3, 9], glam::DMat3::IDENTITY),
         ("values for dimensions", hole.clone(), [3, 3, 2], glam::DMat3::IDENTITY),
         ("not finite", { let mut v = hole.clone(); v[4] = f32::NAN; v }, [3, 3, 3], glam::DMat3::IDENTITY),
         ("boundary", { let mut v = hole.clone(); v[0] = -0.5; v }, [3, 3, 3], glam::DMat3::IDENTITY),
+        // fuzz/corpus/tracking/4e10ea34…: a sample of 1e30 (a "far" sentinel) made every call
+        // near it run 65,536 segments and fail; the grid is refused instead, naming the cell.
+        ("in cell (1, 1, 1)", { let mut v = hole.clone(); v[26] = 1e30; v }, [3, 3, 3], glam::DMat3::IDENTITY),
         ("uniform scale", hole.clone(), [3, 3, 3], glam::DMat3::from_diagonal(DVec3::new(1.0, 2.0, 1.0))),
         ("uniform scale", hole.clone(), [3, 3, 3], glam::DMat3::from_diagonal(DVec3::new(1.0, 1.0, -1.0))),
     ];

@@ -17,6 +17,18 @@ use glam::{DMat3, DVec2, DVec3, IVec3};
 
 /// A similarity transform's columns may differ in length by this relative amount.
 const SIMILARITY_TOLERANCE: f64 = 1e-6;
+/// The largest slope of the interpolant accepted, in world units per world unit. A signed
+/// distance's trilinear interpolant has at most √3; values in voxel units instead of object
+/// units give about the resolution; beyond 1e6 a value is a sentinel ("far", 1e30, FLT_MAX),
+/// whose cells would cut every step near them to 1e-30 of the way (found by fuzzing: one sample
+/// of 1e30 made each tracking call run 65,536 segments and fail).
+const MAX_SLOPE: f64 = 1e6;
+/// Cells per axis of a block of [`GridSurface::block_lipschitz`].
+const BLOCK: i32 = 8;
+/// A segment's bound reads at most this many cells (or blocks) of the gradient bounds: beyond,
+/// blocks of [`BLOCK`]³ cells, then the global bound (a segment across a 512³ grid would
+/// otherwise read 1.3e8 cells per bound).
+const MAX_BOX_READS: i32 = 4096;
 
 #[derive(Clone, Debug)]
 pub struct GridSurface {
@@ -30,6 +42,8 @@ pub struct GridSurface {
     translation: DVec3,
     /// Per cell, a bound of `|∇f|` (world units per world unit; rounded up to f32).
     lipschitz: Vec<f32>,
+    /// Per block of [`BLOCK`]³ cells, the largest of its cells' bounds.
+    block_lipschitz: Vec<f32>,
     /// A Lipschitz constant of `f` everywhere (the largest cell's, plus 1 beyond the grid).
     global_lipschitz: f64,
     bounds: Aabb,
@@ -103,8 +117,26 @@ impl GridSurface {
         }
         let corners = (0..8).map(|i| linear * DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64) + translation);
         let (min, max) = corners.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
+        if let Some(i) = lipschitz.iter().position(|&l| f64::from(l) > MAX_SLOPE) {
+            let i = i as i32;
+            let cell = (i % cells.x, (i / cells.x) % cells.y, i / (cells.x * cells.y));
+            return Err(invalid(format!(
+                "grid values change by up to {:e} per unit of distance in cell {cell:?}, more than {MAX_SLOPE:e}: the samples must be signed distances in object units (which change by at most sqrt(3) in a cell); clamp sentinel values such as 1e30 to the grid's diagonal",
+                lipschitz[i as usize]
+            )));
+        }
         let global_lipschitz = f64::from(lipschitz.iter().copied().fold(0.0f32, f32::max)) + 1.0;
-        Ok(GridSurface { dims, values: values.to_vec(), rotation, scale, translation, lipschitz, global_lipschitz, bounds: Aabb { min, max } })
+        let blocks = block_dims(cells);
+        let mut block_lipschitz = vec![0.0f32; (blocks.x * blocks.y * blocks.z) as usize];
+        for z in 0..cells.z {
+            for y in 0..cells.y {
+                for x in 0..cells.x {
+                    let b = &mut block_lipschitz[(((z / BLOCK) * blocks.y + y / BLOCK) * blocks.x + x / BLOCK) as usize];
+                    *b = b.max(lipschitz[((z * cells.y + y) * cells.x + x) as usize]);
+                }
+            }
+        }
+        Ok(GridSurface { dims, values: values.to_vec(), rotation, scale, translation, lipschitz, block_lipschitz, global_lipschitz, bounds: Aabb { min, max } })
     }
 
     /// Grid coordinates (`[0, n − 1]` per axis inside) of a world point.
@@ -155,14 +187,14 @@ impl GridSurface {
         };
         let top = (self.dims - IVec3::ONE).as_dvec3();
         let inside = |g: DVec3| g.cmpge(DVec3::ZERO).all() && g.cmple(top).all();
-        let mut largest: f32 = 0.0;
-        for z in lo.z..=hi.z {
-            for y in lo.y..=hi.y {
-                for x in lo.x..=hi.x {
-                    largest = largest.max(self.lipschitz[((z * cells.y + y) * cells.x + x) as usize]);
-                }
-            }
-        }
+        let reads = |lo: IVec3, hi: IVec3| (hi - lo + IVec3::ONE).as_dvec3().element_product();
+        let largest = if reads(lo, hi) <= f64::from(MAX_BOX_READS) {
+            box_max(&self.lipschitz, cells, lo, hi)
+        } else if reads(lo / BLOCK, hi / BLOCK) <= f64::from(MAX_BOX_READS) {
+            box_max(&self.block_lipschitz, block_dims(cells), lo / BLOCK, hi / BLOCK)
+        } else {
+            return self.global_lipschitz;
+        };
         // Beyond the grid f adds the distance to the grid (slope 1) to a value that moves with
         // the nearest grid point (slope at most the grid's): both ends inside keep the segment
         // inside the (convex) box.
@@ -172,6 +204,24 @@ impl GridSurface {
             f64::from(largest) + 1.0
         }
     }
+}
+
+/// Blocks of [`BLOCK`]³ per axis covering `cells`.
+fn block_dims(cells: IVec3) -> IVec3 {
+    (cells + IVec3::splat(BLOCK - 1)) / BLOCK
+}
+
+/// The largest of `values` (`x` fastest over `dims`) in the box `[lo, hi]`.
+fn box_max(values: &[f32], dims: IVec3, lo: IVec3, hi: IVec3) -> f32 {
+    let mut largest: f32 = 0.0;
+    for z in lo.z..=hi.z {
+        for y in lo.y..=hi.y {
+            for x in lo.x..=hi.x {
+                largest = largest.max(values[((z * dims.y + y) * dims.x + x) as usize]);
+            }
+        }
+    }
+    largest
 }
 
 /// The smallest f32 at least `x`.
@@ -209,6 +259,20 @@ impl MeanSurface for GridSurface {
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {
         let lipschitz = self.lipschitz_along(p, d, length);
         Ok(SegmentBound { length, f_lo: [start.f, start.f - lipschitz * length], f_hi: [start.f, start.f + lipschitz * length], cos: [-1.0, 1.0], end: None })
+    }
+
+    /// Steps by the gradient bound of the cells near the ray, not the grid's largest (one wild
+    /// sample made every step of every ray 1e30 times too short, found by fuzzing). The cells
+    /// a step of `gap / L_near` reaches bound `f` on it; when they allow a larger slope `L`,
+    /// `gap / L` is shorter, so its cells are among them and `f` stays above `level`.
+    fn clearance(&self, start: &SurfacePoint, p: DVec3, d: DVec3, level: f64, _: &mut ()) -> f64 {
+        let gap = start.f - level;
+        if !(gap > 0.0) {
+            return 0.0;
+        }
+        let near = self.lipschitz_along(p, d, 0.0);
+        let reach = self.lipschitz_along(p, d, gap / near);
+        gap / near.max(reach)
     }
 
     /// An interpolated distance may change faster than the distance itself.

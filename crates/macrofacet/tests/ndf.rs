@@ -210,6 +210,17 @@ fn gpss_projected_area_range_bounds_every_direction_of_the_range() {
         }
     }
     assert!(Gpss::new(0.3, 0.2, 0.1).unwrap().projected_area_range([0.0, 1.0]).is_none());
+    // fuzz/artifacts/tracking/crash-548e74cf…: alpha_z / alpha = 8e9 at grazing w. The spread
+    // written alpha_z² + (alpha² − alpha_z²) sin² cancelled to 0 at sin² = 1: an upper bound of
+    // 1.8e-15 for an area of 1.3e-5 (a majorant 7e9 times too low).
+    let gpss = Gpss::new(3.3e-5, 3.3e-5, 2.7e5).unwrap();
+    for z in [[-1.8e-15, 1.8e-15], [0.0, 1e-12], [-1e-3, -1e-9]] {
+        let (upper, lower) = gpss.projected_area_range(z).unwrap();
+        for w_z in [z[0], 0.5 * (z[0] + z[1]), z[1]] {
+            let area = gpss.projected_area(DVec3::new((1.0 - w_z * w_z).sqrt(), 0.0, w_z));
+            assert!(area <= upper * (1.0 + 1e-12) && area >= lower * (1.0 - 1e-12), "w_z {w_z} in {z:?}: {area} outside [{lower}, {upper}]");
+        }
+    }
     // GGX up to α = 1 (the area grows with w_z) and Beckmann (gpss with α_z = 0): the same.
     for ndf in [Ndf::Ggx(Ggx::new(0.2, 0.2).unwrap()), Ndf::Ggx(Ggx::new(1.0, 1.0).unwrap()), Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), Ndf::Beckmann(Beckmann::new(3.0, 3.0).unwrap())] {
         for _ in 0..200 {

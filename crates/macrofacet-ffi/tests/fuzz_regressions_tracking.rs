@@ -779,3 +779,28 @@ fn segment_below_the_rounding_of_t_stops_the_call() {
         mf_medium_free(m);
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-d87974c0…`: an octahedron scaled by −3 (mirrored, so its
+/// triangles wind clockwise seen from outside) was accepted. Its f < 0 filled the space around
+/// it up to the bounding box, where f turns positive, and `mf_surface_enclosure` put vertices
+/// inside that region. An inside-out mesh is refused with the reason; the same mesh scaled by +3
+/// is accepted.
+#[test]
+fn inside_out_mesh_is_refused() {
+    let octahedron = [1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
+    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    for scale in [3.0, -3.0] {
+        let positions = octahedron.map(|x| scale * x);
+        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: ptr::null(), uvs: ptr::null() };
+        let mut surface = ptr::null_mut();
+        let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+        if scale > 0.0 {
+            assert_eq!(status, mf_status::MF_OK, "{}", last_error());
+            unsafe { mf_surface_free(surface) };
+        } else {
+            assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT);
+            assert!(last_error().contains("inside out") && last_error().contains("signed volume -3.6e1"), "{}", last_error());
+            assert!(surface.is_null());
+        }
+    }
+}

@@ -171,6 +171,22 @@ impl TriangleMesh {
         if open > 0 {
             return Err(invalid(format!("the mesh is not closed: {open} edges belong to an odd number of triangles (a mean surface must enclose its interior)")));
         }
+        // The winding says which side is inside: counter-clockwise seen from outside encloses a
+        // positive volume. Turned inside out, f < 0 would fill the space around the mesh up to its
+        // bounding box, where f turns positive (found by fuzzing: an octahedron scaled by −3 had
+        // enclosure vertices inside the region). In units of the extent, about the box's centre,
+        // beyond the rounding of a flat mesh's zero volume.
+        let centre = 0.5 * (lo + hi);
+        let volume: f64 = indices
+            .iter()
+            .map(|tri| {
+                let [a, b, c] = tri.map(|v| (positions[v as usize] - centre) / extent);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
+        if volume < -1e-12 {
+            return Err(invalid(format!("the mesh is inside out: its triangles wind clockwise seen from outside (signed volume {:e}); reverse each triangle's winding", volume * extent.powi(3))));
+        }
 
         let mut triangles: Vec<Triangle> = indices
             .iter()

@@ -804,3 +804,22 @@ fn inside_out_mesh_is_refused() {
         }
     }
 }
+
+/// `fuzz/artifacts/fields/crash-e118af36…`: one triangle given twice with the same winding
+/// (every edge used twice, so it passed as closed) made a closest-point query find no triangle:
+/// a panic (index 4294967295). Meshes whose edges are not crossed as often in one direction as
+/// in the other are refused with the reason, and so is an octahedron with one triangle flipped.
+#[test]
+fn inconsistent_winding_is_refused() {
+    let s = 1096.9295554501955;
+    let triangle = [s, 0.0, 0.0, 0.0, s, 0.0, 0.0, 0.0, s];
+    let octahedron = [1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
+    let flipped_one = [0u32, 4, 2, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    let cases: [(&[f64], &[u32]); 3] = [(&triangle, &[0, 1, 2, 0, 1, 2]), (&triangle, &[0, 2, 1, 0, 2, 1]), (&octahedron, &flipped_one)];
+    for (positions, indices) in cases {
+        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: ptr::null(), uvs: ptr::null() };
+        let mut surface = ptr::null_mut();
+        assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_ERROR_INVALID_ARGUMENT, "{indices:?}");
+        assert!(last_error().contains("winding is inconsistent"), "{indices:?}: {}", last_error());
+    }
+}

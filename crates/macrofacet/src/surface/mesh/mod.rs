@@ -157,19 +157,28 @@ impl TriangleMesh {
 
         // A medium fills the mesh's interior: the mesh must be closed (every edge shared by an
         // even number of triangles; zero-area triangles count like any other).
-        let mut edge_uses: HashMap<(u32, u32), u32> = HashMap::new();
+        // Per edge, its uses and their balance (+1 from the lower vertex id, −1 back).
+        let mut edge_uses: HashMap<(u32, u32), (u32, i32)> = HashMap::new();
         for tri in indices {
             let w = corners(tri);
             for i in 0..3 {
                 let (u, v) = (w[i], w[(i + 1) % 3]);
                 if u != v {
-                    *edge_uses.entry((u.min(v), u.max(v))).or_insert(0) += 1;
+                    let uses = edge_uses.entry((u.min(v), u.max(v))).or_insert((0, 0));
+                    *uses = (uses.0 + 1, uses.1 + if u < v { 1 } else { -1 });
                 }
             }
         }
-        let open = edge_uses.values().filter(|&&n| n % 2 == 1).count();
+        let open = edge_uses.values().filter(|(n, _)| n % 2 == 1).count();
         if open > 0 {
             return Err(invalid(format!("the mesh is not closed: {open} edges belong to an odd number of triangles (a mean surface must enclose its interior)")));
+        }
+        // Consistent winding: each edge crossed as often in one direction as in the other (found
+        // by fuzzing: a triangle given twice with the same winding passed as closed, and a
+        // closest-point query on it found no triangle, a panic).
+        let unpaired = edge_uses.values().filter(|(_, balance)| *balance != 0).count();
+        if unpaired > 0 {
+            return Err(invalid(format!("the mesh's winding is inconsistent: {unpaired} edges are crossed more often in one direction than in the other (neighbouring triangles must wind the same way, counter-clockwise seen from outside)")));
         }
         // The winding says which side is inside: counter-clockwise seen from outside encloses a
         // positive volume. Turned inside out, f < 0 would fill the space around the mesh up to its

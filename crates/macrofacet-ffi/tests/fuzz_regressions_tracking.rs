@@ -823,3 +823,21 @@ fn inconsistent_winding_is_refused() {
         assert!(last_error().contains("winding is inconsistent"), "{indices:?}: {}", last_error());
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-fac063b4…`: a sphere's pole of length ~1.8e-162 was normalised
+/// through its squared length, which is subnormal: `mf_surface_eval` at the centre (where the
+/// normal is the pole) answered a normal of length 1.0000118 (0.798 for the pole below).
+#[test]
+fn tiny_sphere_pole_is_a_unit_normal() {
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    for pole in [mf_vec3 { x: 1.7721047679881543e-162, y: 0.0, z: 0.0 }, mf_vec3 { x: 1.7721047679881543e-162, y: -2.975777e-298, z: 1e-163 }] {
+        let mut sphere = ptr::null_mut();
+        assert_eq!(unsafe { mf_surface_new_sphere(zero, 2.858251005505063e-17, true, pole, &mut sphere) }, mf_status::MF_OK);
+        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+        assert_eq!(unsafe { mf_surface_eval(sphere, ptr::null_mut(), zero, &mut point) }, mf_status::MF_OK);
+        let n = point.normal;
+        let length = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+        assert!((length - 1.0).abs() < 1e-12, "{pole:?}: normal {n:?}, length {length}");
+        unsafe { mf_surface_free(sphere) };
+    }
+}

@@ -23,7 +23,9 @@ impl Sphere {
         check_finite_vector("center", center)?;
         check_positive("radius", radius, false)?;
         check_finite_vector("pole", pole)?;
-        let pole = pole.try_normalize().ok_or_else(|| Error::new(ErrorKind::InvalidArgument, "pole must not be the zero vector"))?;
+        // Rescaled first, like the normals of `point` (found by fuzzing: a pole of length 1.8e-162
+        // became a normal of length 1.0000118 at the centre).
+        let pole = rescaled(pole).try_normalize().ok_or_else(|| Error::new(ErrorKind::InvalidArgument, "pole must not be the zero vector"))?;
         Ok(Sphere { center, radius, flip_normals, pole })
     }
 

@@ -841,3 +841,73 @@ fn tiny_sphere_pole_is_a_unit_normal() {
         unsafe { mf_surface_free(sphere) };
     }
 }
+
+/// `fuzz/artifacts/tracking/crash-dd7b51a5…`: an octahedron 4 wide (vertex normals), a ray from
+/// (−1e308, 0, −1.8e308). Scaled by 2^-1023 for the far closest-point test, the mesh's edges were
+/// subnormal and every distance NaN: no triangle was found, a panic (MF_ERROR_INTERNAL through
+/// the ABI). From there the mesh is one point: its first vertex.
+#[test]
+fn mesh_seen_from_the_end_of_f64() {
+    let m = medium(&[("sigma", 1e50), ("alpha", 1e-6)], &[("distribution", "beckmann")]);
+    let unit = [1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
+    let positions = unit.map(|x| 2.0 * x);
+    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: unit.as_ptr(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let origin = mf_vec3 { x: -9.999999999997382e307, y: -8.524953868804761e-198, z: -1.7976931348623157e308 };
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+    assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), origin, &mut point) }, mf_status::MF_OK, "{}", last_error());
+    let n = point.normal;
+    assert!(point.f > 0.0 && ((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() < 1e-12, "{point:?}");
+    let q = mf_track_query { origin, d: mf_vec3 { x: 6.9510363278929e-7, y: 0.0, z: 0.9999999999997584 }, t_max: f64::INFINITY, seed: 0 };
+    let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+    let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
+    assert!(status == mf_status::MF_OK || status == mf_status::MF_ERROR_INVALID_ARGUMENT, "{status:?}: {}", last_error());
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}
+
+const FAR_PLANE_NORMAL: [f64; 3] = [-0.5911580073262839, 0.6404998771853718, -0.49019599926921154];
+const FAR_PLANE_OFFSET: f64 = -9.651692089942455e49;
+
+unsafe extern "C" fn far_plane(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
+    let [x, y, z] = FAR_PLANE_NORMAL;
+    unsafe { *out = mf_surface_point { f: x * p.x + y * p.y + z * p.z - FAR_PLANE_OFFSET, normal: mf_vec3 { x, y, z }, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
+    0
+}
+
+/// `fuzz/artifacts/fields/crash-5a5f8da7…`: σ = 1e50, an honest plane, a ray from z = −1e225
+/// crossing it at t ≈ 1e225. The tentative collisions `origin + t d` near z = −4e221 were off by
+/// an ulp of t (1.5e209), while the bounds of `f` were widened by the rounding of the points'
+/// own coordinates (4e206): σ_t exceeded the majorant by 1e158 in every call. The widening now
+/// counts `t`; 1e159 σ of rounding leaves the majorant too loose to finish, and the calls end
+/// with the tentative cap's error, naming the cause, never MF_OK with a broken majorant.
+#[test]
+fn plane_majorant_holds_far_along_the_ray() {
+    let m = medium(&[("sigma", 1e50), ("alpha", 3.0)], &[("distribution", "gpss")]);
+    let everything = (mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY }, mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: f64::INFINITY });
+    let surface = callback_surface(far_plane, MF_SURFACE_CONCAVE, everything.0, everything.1);
+    let origin = mf_vec3 { x: -1.3621627434734314e50, y: -3.816233434913849e50, z: -1.0198671032402877e225 };
+    let d = glam::DVec3::new(-0.00022257322900991308, -0.0004917331059362258, 0.9999988543297802).normalize();
+    for seed in 0..4 {
+        let q = mf_track_query { origin, d: mf_vec3 { x: d.x, y: d.y, z: d.z }, t_max: f64::INFINITY, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        match unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) } {
+            mf_status::MF_OK => assert_eq!(unsafe { c.assume_init() }.stats.majorant_violations, 0, "seed {seed}"),
+            _ => assert!(last_error().contains("rounding of the coordinates"), "seed {seed}: {}", last_error()),
+        }
+        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+        match unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) } {
+            mf_status::MF_OK => assert_eq!(t.stats.majorant_violations, 0, "seed {seed}"),
+            _ => assert!(last_error().contains("rounding of the coordinates"), "seed {seed}: {}", last_error()),
+        }
+    }
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}

@@ -101,9 +101,9 @@ const WIDE_COS_RANGE: f64 = 0.5;
 const LOOSE_AREA: f64 = 4.0;
 const WIDE_RANGE_COLLISIONS: f64 = 8.0;
 const MAX_WIDE_SHORTENINGS: u32 = 2;
-/// Ulps of the coordinates by which the bounds of `f` are widened: the rounding of the points
-/// where the surface is queried (at most `√3/2` ulp of `|q|∞`) times the slope of `f` (1 for a
-/// signed distance, a little more for an interpolated grid).
+/// Ulps of `|q|∞ + t` by which the bounds of `f` are widened: the rounding of the points
+/// `q = origin + t d` where the surface is queried (of `t d` and of the sum) times the slope of
+/// `f` (1 for a signed distance, a little more for an interpolated grid).
 const POSITION_ROUNDING: f64 = 4.0 * f64::EPSILON;
 /// Lipschitz steps above the shell per segment (each one surface query).
 const MAX_SKIPS: u32 = 64;
@@ -401,10 +401,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 bound.f_hi = lipschitz.f_hi;
             }
             // The surface is queried at rounded points `origin + t d`: f there may differ from
-            // the line through the ends by the rounding of the coordinates, at most linear in
-            // between since |q|∞ is convex (found by fuzzing: σ = 1e-50 at |p| ~ 1e-37 broke a
-            // plane's exact majorant).
-            let rounding = [p, p + bound.length * d].map(|q| POSITION_ROUNDING * q.abs().max_element());
+            // the line through the ends by the rounding of the coordinates and of `t d`, at most
+            // linear in between since |q|∞ and t are (found by fuzzing: σ = 1e-50 at
+            // |p| ~ 1e-37 broke a plane's exact majorant; so did t = 1e225 from an origin at
+            // z = −1e225, where the points near z = −4e221 were off by an ulp of t, 1.5e209).
+            let rounding = [(p, t), (p + bound.length * d, t + bound.length)].map(|(q, t)| POSITION_ROUNDING * (q.abs().max_element() + t));
             if rounding.iter().all(|r| r.is_finite()) {
                 bound.f_lo = [bound.f_lo[0] - rounding[0], bound.f_lo[1] - rounding[1]];
                 bound.f_hi = [bound.f_hi[0] + rounding[0], bound.f_hi[1] + rounding[1]];

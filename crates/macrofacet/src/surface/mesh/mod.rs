@@ -295,6 +295,13 @@ impl TriangleMesh {
                 best = c;
             }
         }
+        if best.triangle == Closest::NONE.triangle {
+            // The mesh is below the rounding of p's coordinates: scaled, its edges were subnormal
+            // and every distance NaN (found by fuzzing: an octahedron 4 wide seen from 1.8e308, a
+            // panic). From there all its points are one; its first vertex stands for them.
+            let v = self.triangles[0].p[0];
+            return Closest { triangle: 0, point: v, barycentric: DVec3::X, feature: Feature::Vertex(0), distance_sq: ((p - v) * scale).length_squared() / (scale * scale) };
+        }
         Closest { point: best.point / scale, distance_sq: best.distance_sq / (scale * scale), ..best }
     }
 

@@ -290,8 +290,8 @@ typedef struct mf_field_callbacks {
    */
   mf_field_bounds_fn bounds;
   /**
-   * The largest `σ` anywhere (the region's top face is at `shell_extent × sigma_max`); 0 when
-   * `σ` does not vary.
+   * The largest `σ` anywhere (the region's top face is at `shell_extent × sigma_max`), within
+   * the domain of `sigma` (`[1e-50, 1e50]`); 0 when `σ` does not vary.
    */
   double sigma_max;
 } mf_field_callbacks;

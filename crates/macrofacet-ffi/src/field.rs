@@ -74,8 +74,8 @@ pub struct mf_field_callbacks {
     pub at: mf_field_at_fn,
     /// Required.
     pub bounds: mf_field_bounds_fn,
-    /// The largest `σ` anywhere (the region's top face is at `shell_extent × sigma_max`); 0 when
-    /// `σ` does not vary.
+    /// The largest `σ` anywhere (the region's top face is at `shell_extent × sigma_max`), within
+    /// the domain of `sigma` (`[1e-50, 1e50]`); 0 when `σ` does not vary.
     pub sigma_max: f64,
 }
 
@@ -203,7 +203,10 @@ pub unsafe extern "C" fn mf_field_new_callbacks(callbacks: *const mf_field_callb
         let bounds = c.bounds.ok_or_else(|| FfiError::null("callbacks->bounds"))?;
         let sigma_max = match c.sigma_max {
             0.0 => None,
-            s if s > 0.0 && s.is_finite() => Some(s),
+            // Within the domain of sigma: beyond it every value would be refused where the field
+            // is evaluated (found by fuzzing: sigma_max = DBL_MAX made the first segment
+            // infinitely long, with a lower bound of f that lost its slope).
+            s if s > 0.0 && s.is_finite() => Some(macrofacet::limits::check_range("callbacks->sigma_max", s, macrofacet::limits::SIGMA_RANGE, "the largest sigma must lie in the domain of sigma")?),
             s => return Err(Error::new(ErrorKind::InvalidArgument, format!("callbacks->sigma_max must be 0 (sigma does not vary) or finite and > 0, got {s}")).into()),
         };
         *slot = into_handle(mf_field { at, bounds, sigma_max });

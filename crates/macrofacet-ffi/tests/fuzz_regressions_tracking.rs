@@ -911,3 +911,55 @@ fn plane_majorant_holds_far_along_the_ray() {
         mf_medium_free(m);
     }
 }
+
+unsafe extern "C" fn no_params(_: *mut std::ffi::c_void, _: mf_vec3, _: *const mf_surface_point, out: *mut mf_local_params) -> i32 {
+    unsafe { *out = std::mem::zeroed() };
+    0
+}
+
+unsafe extern "C" fn no_bounds(_: *mut std::ffi::c_void, _: mf_vec3, _: mf_vec3, _: f64, out: *mut mf_param_bounds) -> i32 {
+    unsafe { *out = std::mem::zeroed() };
+    0
+}
+
+/// `fuzz/artifacts/fields/crash-e4c1fdd3…`: a field declaring `sigma_max = DBL_MAX` made the
+/// region's heights σ = 1.8e308: the first segment was infinitely long, its Lipschitz lower bound
+/// of f went to −∞, the line through it lost its slope, and σ_t exceeded the majorant at the
+/// first tentative collision. `sigma_max` beyond the domain of sigma is refused with the reason.
+#[test]
+fn field_sigma_max_beyond_the_domain_is_refused() {
+    for (sigma_max, ok) in [(f64::MAX, false), (1e51, false), (1e-51, false), (1e50, true), (0.0, true)] {
+        let callbacks = mf_field_callbacks { at: Some(no_params), bounds: Some(no_bounds), sigma_max };
+        let mut field = ptr::null_mut();
+        let status = unsafe { mf_field_new_callbacks(&callbacks, &mut field) };
+        if ok {
+            assert_eq!(status, mf_status::MF_OK, "{sigma_max:e}: {}", last_error());
+            unsafe { mf_field_free(field) };
+        } else {
+            assert_ne!(status, mf_status::MF_OK, "{sigma_max:e}");
+            assert!(last_error().contains("callbacks->sigma_max") && field.is_null(), "{sigma_max:e}: {}", last_error());
+        }
+    }
+}
+
+/// `fuzz/artifacts/tracking/crash-a18df8e8…`: an octahedron 2.9e-50 wide with one vertex moved to
+/// 1.1e-35: at a point within the mesh's rounding of an edge, the normal is the edge's
+/// pseudo-normal, the sum of two nearly opposite face normals (length 1.4e-160) normalised
+/// through its subnormal squared length: 1.0000167 long. It is rescaled first now.
+#[test]
+fn mesh_normal_near_an_edge_is_unit() {
+    let s = 1.4504026155174787e-50;
+    let positions = [-7.796264947706224e-196, -1.1116935433363922e-35, -2.8247524380560736e-185, -s, 0.0, 0.0, 0.0, s, 0.0, 0.0, -s, 0.0, 0.0, 0.0, s, 0.0, 0.0, -s];
+    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: ptr::null(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK, "{}", last_error());
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let p = mf_vec3 { x: -6.611290867050549e-50, y: -6.597909937255984e-50, z: -1.1597177579103332e-49 };
+    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+    assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) }, mf_status::MF_OK, "{}", last_error());
+    let n = point.normal;
+    let length = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+    assert!((length - 1.0).abs() < 1e-12, "normal {n:?}, length {length}");
+    unsafe { mf_surface_free(surface) };
+}

@@ -203,7 +203,9 @@ impl TriangleMesh {
                 let p = tri.map(|v| positions[v as usize]);
                 let n = face_normal(tri);
                 let w = corners(tri);
-                let pn = |v: DVec3| v.try_normalize().unwrap_or(n);
+                // Rescaled first: opposite face normals sum to ~1e-160, whose squared length is
+                // subnormal (found by fuzzing: an edge pseudo-normal of length 1.0000167).
+                let pn = |v: DVec3| rescaled(v).try_normalize().unwrap_or(n);
                 let edge = |i: usize| {
                     let (u, v) = (w[i], w[(i + 1) % 3]);
                     pn(edge_pn.get(&(u.min(v), u.max(v))).copied().unwrap_or(DVec3::ZERO))
@@ -329,7 +331,10 @@ impl TriangleMesh {
             (Some(ns), _) => (c.barycentric.x * ns[0] + c.barycentric.y * ns[1] + c.barycentric.z * ns[2]).try_normalize().unwrap_or(pseudo),
             // ∇(±|p − c|) over a face is its normal on both sides, exactly.
             (None, Feature::Face) => tri.n,
-            (None, _) if distance > self.epsilon => if distance.is_finite() { sign * offset / distance } else { sign * rescaled(offset).normalize() },
+            // The offset normalised, rescaled first (not offset / distance: the closest-point
+            // test's distance is rounded apart from |offset|, and |offset|² of a tiny mesh is
+            // subnormal).
+            (None, _) if distance > self.epsilon => sign * rescaled(offset).try_normalize().unwrap_or(pseudo),
             (None, _) => pseudo,
         };
         // Mitsuba's uv: the texture coordinates interpolated at the closest point, else the

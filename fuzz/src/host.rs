@@ -155,13 +155,27 @@ impl SurfaceHost {
         self.script.honest() && !(self.bounds == BoundSource::Concave && matches!(self.shape, Shape::Sphere { .. }))
     }
 
-    /// The callbacks for `mf_surface_new_callbacks`; the fuzz input sometimes makes them
-    /// invalid (no box, a NULL `point`, an unknown `shape`).
-    pub fn callbacks(&self, b: &mut Bytes) -> mf_surface_callbacks {
-        let (min, max) = match self.shape {
+    /// The box of the shape's interior (`f <= 0`).
+    fn interior_box(&self) -> (DVec3, DVec3) {
+        match self.shape {
             Shape::Plane { .. } => (DVec3::NEG_INFINITY, DVec3::INFINITY),
             Shape::Sphere { center, radius } => (center - DVec3::splat(radius), center + DVec3::splat(radius)),
-        };
+        }
+    }
+
+    /// Whether the box the callbacks declare contains the interior: a smaller one is a lie the
+    /// library cannot see (found by fuzzing: an enclosure of a sphere declared inside a box near
+    /// the origin had vertices inside the region).
+    pub fn declares_its_box(&self, callbacks: &mf_surface_callbacks) -> bool {
+        let (min, max) = self.interior_box();
+        dvec3(callbacks.bounds_min).cmple(min).all() && dvec3(callbacks.bounds_max).cmpge(max).all()
+    }
+
+    /// The callbacks for `mf_surface_new_callbacks`; the fuzz input sometimes makes them
+    /// invalid (no box, a NULL `point`, an unknown `shape`) or declares a box that is not the
+    /// surface's.
+    pub fn callbacks(&self, b: &mut Bytes) -> mf_surface_callbacks {
+        let (min, max) = self.interior_box();
         let (min, max) = match b.u8() % 16 {
             0 => (DVec3::new(b.float(), b.float(), b.float()), DVec3::new(b.float(), b.float(), b.float())),
             1 => (max, min),

@@ -66,7 +66,7 @@ pub fn surface(b: &mut Bytes, size: f64, center: DVec3) -> Option<Built> {
                 eprintln!("callback surface: {host:?} {callbacks:?}");
             }
             let s = check::call(|o| unsafe { mf_surface_new_callbacks(&callbacks, o) }).ok()?;
-            Some(Built { surface: Surface(s), host: Some(host), exact: true })
+            Some(Built { surface: Surface(s), host: Some(host), exact: host.declares_its_box(&callbacks) })
         }
     }
 }

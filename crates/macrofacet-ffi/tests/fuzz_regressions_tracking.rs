@@ -963,3 +963,30 @@ fn mesh_normal_near_an_edge_is_unit() {
     assert!((length - 1.0).abs() < 1e-12, "normal {n:?}, length {length}");
     unsafe { mf_surface_free(surface) };
 }
+
+/// `fuzz/artifacts/fields/crash-bb6a0e1f…`: an octahedron with two pairs of vertices merged and
+/// one moved to (40, −2, 0): sliver triangles 5e-37 wide and 40 long, whose area rounds to zero
+/// in the closest-point test (not in their normals). Every distance in a cell's list was NaN, no
+/// triangle was found: a panic (MF_ERROR_INTERNAL through the ABI). Slivers are their edges now.
+#[test]
+fn sliver_triangles_have_a_closest_point() {
+    let s = 5.399562187234506e-37;
+    let positions = [-s, 0.0, 0.0, -s, 0.0, 0.0, 0.0, -s, 0.0, 0.0, -s, 0.0, 40.0, -2.0762999195102028, 1.2760930781151428e-261, 0.0, 0.0, -s];
+    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: ptr::null(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK, "{}", last_error());
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    // The point of the artifact, then points around the mesh at its two scales.
+    let mut rng = macrofacet::rng::Pcg32::new(5, 0);
+    for k in 0..20_000 {
+        let scale = [1e-37, 1e-36, 1e-30, 1.0, 40.0][k % 5];
+        let random = mf_vec3 { x: (2.0 * rng.next_f64() - 0.5) * scale, y: (2.0 * rng.next_f64() - 1.0) * scale, z: (2.0 * rng.next_f64() - 1.0) * scale };
+        let p = if k == 0 { mf_vec3 { x: 6.0, y: 6.0, z: -3.6470587769508733 } } else { random };
+        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) }, mf_status::MF_OK, "{p:?}: {}", last_error());
+        let n = point.normal;
+        assert!(!point.f.is_nan() && ((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() < 1e-9, "{p:?}: {point:?}");
+    }
+    unsafe { mf_surface_free(surface) };
+}

@@ -271,15 +271,24 @@ impl TriangleMesh {
         if let Some(i) = hint.filter(|&i| certified(i)) {
             return closest_on_triangle(&self.triangles[i as usize], p, i);
         }
-        let Some(list) = self.grid.list_at(p) else {
-            let seed = hint.map_or(Closest::NONE, |i| closest_on_triangle(&self.triangles[i as usize], p, i));
-            let found = self.bvh.closest(&self.triangles, p, seed);
-            return if found.triangle == Closest::NONE.triangle { self.closest_far(p) } else { found };
-        };
-        if let Some(&i) = list.iter().find(|&&i| certified(i)) {
-            return closest_on_triangle(&self.triangles[i as usize], p, i);
+        if let Some(list) = self.grid.list_at(p) {
+            if let Some(&i) = list.iter().find(|&&i| certified(i)) {
+                return closest_on_triangle(&self.triangles[i as usize], p, i);
+            }
+            let found = closest_among(&self.triangles, p, list, Closest::NONE);
+            // A cell's list without a number among its distances falls through to the whole
+            // mesh (found by fuzzing: sliver triangles 5e-37 wide and 40 long, a panic).
+            if found.triangle != Closest::NONE.triangle {
+                return found;
+            }
         }
-        closest_among(&self.triangles, p, list, Closest::NONE)
+        let seed = hint.map_or(Closest::NONE, |i| closest_on_triangle(&self.triangles[i as usize], p, i));
+        let found = self.bvh.closest(&self.triangles, p, seed);
+        if found.triangle == Closest::NONE.triangle {
+            self.closest_far(p)
+        } else {
+            found
+        }
     }
 
     /// The closest point to a `p` so far away that the products of the closest-point test
@@ -298,11 +307,15 @@ impl TriangleMesh {
             }
         }
         if best.triangle == Closest::NONE.triangle {
-            // The mesh is below the rounding of p's coordinates: scaled, its edges were subnormal
-            // and every distance NaN (found by fuzzing: an octahedron 4 wide seen from 1.8e308, a
-            // panic). From there all its points are one; its first vertex stands for them.
-            let v = self.triangles[0].p[0];
-            return Closest { triangle: 0, point: v, barycentric: DVec3::X, feature: Feature::Vertex(0), distance_sq: ((p - v) * scale).length_squared() / (scale * scale) };
+            // No number among the distances: the mesh is below the rounding of p's coordinates
+            // (scaled, its edges were subnormal; found by fuzzing: an octahedron 4 wide seen from
+            // 1.8e308, a panic), or its triangles are slivers. The nearest vertex stands for it.
+            // (In scaled coordinates, as `best` is.)
+            let vertex = |i: usize, k: usize| {
+                let v = self.triangles[i].p[k] * scale;
+                Closest { triangle: i as u32, point: v, barycentric: [DVec3::X, DVec3::Y, DVec3::Z][k], feature: Feature::Vertex(k), distance_sq: (p * scale - v).length_squared() }
+            };
+            best = (0..self.triangles.len()).flat_map(|i| (0..3).map(move |k| (i, k))).map(|(i, k)| vertex(i, k)).min_by(|a, b| a.distance_sq.total_cmp(&b.distance_sq)).expect("a mesh has triangles");
         }
         Closest { point: best.point / scale, distance_sq: best.distance_sq / (scale * scale), ..best }
     }
@@ -504,10 +517,11 @@ impl MeanSurface for TriangleMesh {
     }
 
     fn point_on_segment(&self, p: DVec3, cache: &MeshCache) -> Result<SurfacePoint> {
-        if cache.candidates.is_empty() {
+        let found = if cache.candidates.is_empty() { Closest::NONE } else { closest_among(&self.triangles, p, &cache.candidates, Closest::NONE) };
+        if found.triangle == Closest::NONE.triangle {
             return self.point(p);
         }
-        Ok(self.surface_point(p, &closest_among(&self.triangles, p, &cache.candidates, Closest::NONE)))
+        Ok(self.surface_point(p, &found))
     }
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> Result<SegmentBound> {

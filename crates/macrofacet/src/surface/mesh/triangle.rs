@@ -81,8 +81,9 @@ pub(super) fn closest_among(triangles: &[Triangle], p: DVec3, candidates: &[u32]
 pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest {
     let [a, b, c] = t.p;
     let make = |point: DVec3, bary: DVec3, feature: Feature| Closest { triangle: index, point, barycentric: bary, feature, distance_sq: (p - point).length_squared() };
-    if t.n == DVec3::ZERO {
-        return (0..3)
+    // A zero-area triangle is its three edges.
+    let on_edges = || {
+        (0..3)
             .map(|i| {
                 let (u, v) = (t.p[i], t.p[(i + 1) % 3]);
                 let e = v - u;
@@ -93,7 +94,10 @@ pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest
                 make(u + s * e, bary, Feature::Edge(i))
             })
             .min_by(|x, y| x.distance_sq.total_cmp(&y.distance_sq))
-            .expect("three edges");
+            .expect("three edges")
+    };
+    if t.n == DVec3::ZERO {
+        return on_edges();
     }
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
@@ -125,7 +129,13 @@ pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
         return make(b + w * (c - b), DVec3::new(0.0, 1.0 - w, w), Feature::Edge(1));
     }
-    let denom = 1.0 / (va + vb + vc);
+    // A sliver whose area rounds to zero here (its normal did not) is its edges too (found by
+    // fuzzing: 5e-37 wide and 40 long, every distance NaN).
+    let sum = va + vb + vc;
+    if !(sum > 0.0) {
+        return on_edges();
+    }
+    let denom = 1.0 / sum;
     let (v, w) = (vb * denom, vc * denom);
     make(a + ab * v + ac * w, DVec3::new(1.0 - v - w, v, w), Feature::Face)
 }

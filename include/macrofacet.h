@@ -498,8 +498,9 @@ typedef struct mf_surface_callbacks {
 
 /**
  * A triangle mesh for [`mf_surface_new_mesh`], in world space. Triangles are counter-clockwise
- * seen from outside (normals point out); the mesh should be closed for the interior to be
- * well defined.
+ * seen from outside (normals point out). The mesh must be closed and consistently wound (each
+ * edge crossed as often in one direction as in the other) with a positive volume: an open,
+ * inconsistently wound or inside-out mesh is refused with the reason.
  */
 typedef struct mf_mesh {
   /**

@@ -990,3 +990,33 @@ fn sliver_triangles_have_a_closest_point() {
     }
     unsafe { mf_surface_free(surface) };
 }
+
+/// `fuzz/artifacts/fields/crash-9c0e51d4…`: a tetrahedron with one vertex moved to ~3e12. The
+/// segment bound dropped each candidate triangle whose lower line stayed above the chord of the
+/// closest one, and rounding dropped that one too: no candidate was left, a panic
+/// (MF_ERROR_INTERNAL through the ABI). The chord's own triangle always stays.
+#[test]
+fn segment_bound_keeps_a_candidate() {
+    let m = medium(&[("sigma", 3.0), ("alpha", 1e-6)], &[("distribution", "ggx")]);
+    let a = 0.9000000004163026;
+    let positions = [-2954598395594.5703, -2169866234929.383, -2955209234974.085, a, -a, -a, -a, a, -a, -a, -a, a];
+    let indices = [0u32, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2];
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
+    let mut surface = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK, "{}", last_error());
+    let origin = mf_vec3 { x: -1.4947998053850968, y: 0.4235294119557993, z: 0.42352941196061145 };
+    let d = mf_vec3 { x: -0.9826117664013281, y: -0.1836819729199024, z: 0.027113972215260865 };
+    for seed in (0..200).chain([18446744073709520775]) {
+        let q = mf_track_query { origin, d, t_max: 9.000000004163024, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
+        assert_ne!(status, mf_status::MF_ERROR_INTERNAL, "seed {seed}: {}", last_error());
+        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+        let status = unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) };
+        assert_ne!(status, mf_status::MF_ERROR_INTERNAL, "seed {seed}: {}", last_error());
+    }
+    unsafe {
+        mf_surface_free(surface);
+        mf_medium_free(m);
+    }
+}

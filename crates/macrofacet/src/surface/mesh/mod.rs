@@ -602,7 +602,9 @@ impl MeanSurface for TriangleMesh {
         let chord = [first[k].distance + eps, last[k].distance + eps];
         // A candidate whose lower line stays above that chord is never the closest on the piece:
         // drop it (from the bounds, and from the point queries on this segment).
-        let keep: Few<bool> = lines.iter().map(|(v, slope)| !(*v > chord[0] && v + slope * piece > chord[1])).collect();
+        // The chord's own triangle stays, whatever the rounding of its lines (found by fuzzing: a
+        // tetrahedron with a vertex moved to 3e12 lost every candidate, a panic).
+        let keep: Few<bool> = lines.iter().enumerate().map(|(j, (v, slope))| j == k || !(*v > chord[0] && v + slope * piece > chord[1])).collect();
         retain_flagged(&mut cache.candidates, &keep);
         retain_flagged(&mut first, &keep);
         retain_flagged(&mut last, &keep);

@@ -728,6 +728,24 @@ fn enclosure_cells_stay_above_underflow() {
     unsafe { mf_surface_free(surface) };
 }
 
+/// `fuzz/artifacts/tracking/crash-18c6f34f79c2316e57d65fcaa13a1b7ce0fff118`: a convex host
+/// plane declaring a box from x = −1e308 to −2.4, `mf_surface_enclosure` at level 3e-50 with
+/// cells of 1.44e307. The grid's far corner (1.2e308) is a number, but its offset from the near
+/// one, 16 cells of 1.44e307, is not: a vertex at x = +inf came back with MF_OK. Such a grid is
+/// now refused, naming the cells.
+#[test]
+fn enclosure_grid_offsets_stay_finite() {
+    let bounds_min = mf_vec3 { x: -9.999996633235829e307, y: -416.4931306453479, z: -416.49313092669183 };
+    let bounds_max = mf_vec3 { x: -2.3866660595298272, y: -9.776983104865359e-292, z: -1e-320 };
+    let surface = callback_surface(tilted_plane, MF_SURFACE_CONVEX, bounds_min, bounds_max);
+    let mut enclosure = ptr::null_mut();
+    let status = unsafe { mf_surface_enclosure(surface, ptr::null_mut(), 3e-50, 1.441296652194311e307, &mut enclosure) };
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT);
+    assert!(enclosure.is_null());
+    assert!(last_error().contains("exceeds the range of f64"), "{}", last_error());
+    unsafe { mf_surface_free(surface) };
+}
+
 /// `fuzz/corpus/tracking/b7f8d8b1…` (1.2 s per run): σ = 1e-50, Beckmann α = 1e-6, a ray deep
 /// inside an octahedron of size 1000 (f ≈ −497), moving outward, where the majorant is 0. Each
 /// empty segment asks for twice its length, but the tracker halved it back for looseness that

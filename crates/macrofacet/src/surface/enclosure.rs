@@ -73,13 +73,20 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     // host's f32 copy of them while the cells exceed 1e-4 of the coordinates (the default cell
     // of a surface near the origin is 1/128 of its size).
     let level = level + 1e-3 * h * surface.lipschitz();
-    // Every corner `lo + g h` must be a number (found by fuzzing: level −1e308 with cells of
-    // 1e308 made the grid's extent overflow, and the vertices NaN).
-    if !((hi - lo).is_finite() && (lo + (hi - lo) + DVec3::splat(BLOCK as f64 * h)).is_finite()) {
-        return Err(invalid(format!("the enclosure's grid (cells of {h:e} around the surface's box grown by {grow:e} for level {level:e}) exceeds the range of f64")));
+    // Every corner `lo + g h` must be a number, and so must its offset `g h` (found by fuzzing:
+    // level −1e308 with cells of 1e308 made the grid's extent overflow, and the vertices NaN; a
+    // box from −1e308 to −2 with cells of 1.4e307 had `g h` = inf at the far corner, which lies
+    // at 1.2e308).
+    let out_of_range = || invalid(format!("the enclosure's grid (cells of {h:e} around the surface's box grown by {grow:e} for level {level:e}) exceeds the range of f64"));
+    if !(hi - lo).is_finite() {
+        return Err(out_of_range());
     }
     let blocks = ((hi - lo) / (h * BLOCK as f64)).ceil().as_ivec3().max(IVec3::ONE);
     let cells = blocks * BLOCK;
+    let far_offset = cells.as_dvec3() * h;
+    if !(far_offset.is_finite() && (lo + far_offset).is_finite()) {
+        return Err(out_of_range());
+    }
 
     // Kept cells, by a descent through blocks halving down to cells: one query at a block's
     // centre decides it whole when `f` there is at least half its diagonal from the level.

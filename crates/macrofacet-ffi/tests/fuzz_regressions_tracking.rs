@@ -14,6 +14,42 @@ fn tetrahedron(s: f64) -> (Vec<f64>, Vec<u32>) {
     (positions, indices)
 }
 
+/// The regular octahedron with vertices `±s` on the axes, in the order +x, −x, +y, −y, +z, −z.
+fn octahedron(s: f64) -> (Vec<f64>, Vec<u32>) {
+    let positions = vec![s, 0.0, 0.0, -s, 0.0, 0.0, 0.0, s, 0.0, 0.0, -s, 0.0, 0.0, 0.0, s, 0.0, 0.0, -s];
+    let indices = vec![0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    (positions, indices)
+}
+
+/// `mf_surface_new_mesh` on flat positions (and optional vertex normals and uvs) with triangle
+/// indices: its status and surface.
+fn new_mesh(positions: &[f64], indices: &[u32], normals: Option<&[f64]>, uvs: Option<&[f64]>) -> (mf_status, *mut mf_surface) {
+    let or_null = |v: Option<&[f64]>| v.map_or(ptr::null(), <[f64]>::as_ptr);
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: or_null(normals), uvs: or_null(uvs) };
+    let mut surface = ptr::null_mut();
+    let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+    (status, surface)
+}
+
+/// A mesh surface that must be accepted.
+fn accepted_mesh(positions: &[f64], indices: &[u32], normals: Option<&[f64]>) -> *mut mf_surface {
+    let (status, surface) = new_mesh(positions, indices, normals, None);
+    assert_eq!(status, mf_status::MF_OK, "{}", last_error());
+    surface
+}
+
+/// `mf_surface_eval` at `p`: its status and point.
+fn eval(surface: *const mf_surface, p: mf_vec3) -> (mf_status, mf_surface_point) {
+    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
+    let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };
+    (status, point)
+}
+
+fn length(v: mf_vec3) -> f64 {
+    (v.x * v.x + v.y * v.y + v.z * v.z).sqrt()
+}
+
 /// `fuzz/artifacts/tracking/crash-21498556eb8466047680f6176e4131c1c7fd8ce1` (a tetrahedron of
 /// half-width 1e300), and the sweep of half-widths around it. Two failures:
 /// - from 1e103 on, `mf_surface_new_mesh` panics (index 4294967295 out of bounds in
@@ -29,14 +65,11 @@ fn tetrahedron(s: f64) -> (Vec<f64>, Vec<u32>) {
 fn huge_mesh_is_refused_or_answers_right() {
     for s in [1.0, 1e50, 1e76, 1e77, 1e100, 1e102, 1e103, 1e150, 1e300] {
         let (positions, indices) = tetrahedron(s);
-        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
-        let mut surface = ptr::null_mut();
-        let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+        let (status, surface) = new_mesh(&positions, &indices, None, None);
         assert!(status == mf_status::MF_OK || status == mf_status::MF_ERROR_INVALID_ARGUMENT, "half-width {s:e}: {status:?}");
         if status == mf_status::MF_OK {
             let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-            let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), zero, &mut point) };
+            let (status, point) = eval(surface, zero);
             assert_eq!(status, mf_status::MF_OK, "half-width {s:e}");
             let expected = -s / 3f64.sqrt();
             assert!((point.f - expected).abs() <= 1e-9 * s, "half-width {s:e}: f at the centre {} (expected {expected})", point.f);
@@ -54,7 +87,7 @@ unsafe extern "C" fn nan_point(_: *mut std::ffi::c_void, _: mf_vec3, out: *mut m
 
 /// A host sphere of radius 1 whose normal has length 2.
 unsafe extern "C" fn long_normal_point(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
-    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let r = length(p);
     let n = mf_vec3 { x: 2.0 * p.x / r, y: 2.0 * p.y / r, z: 2.0 * p.z / r };
     unsafe { *out = mf_surface_point { f: r - 1.0, normal: n, tangent: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
     0
@@ -101,19 +134,15 @@ fn mesh_without_area_is_refused_or_has_unit_normals() {
         ("flat", vec![0.0, 0.0, 0.0, -2.0, 0.0, 0.0, -2.0, 0.0, 0.0, 0.0, -1.0, 0.0], vec![0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2]),
     ];
     for (name, positions, indices) in cases {
-        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: ptr::null(), uvs: ptr::null() };
-        let mut surface = ptr::null_mut();
-        let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+        let (status, surface) = new_mesh(&positions, &indices, None, None);
         if status == mf_status::MF_ERROR_INVALID_ARGUMENT {
             continue;
         }
         assert_eq!(status, mf_status::MF_OK, "{name}");
         for p in [mf_vec3 { x: 0.3, y: 0.2, z: 0.1 }, mf_vec3 { x: -1.0, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.5, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, mf_vec3 { x: 1e-320, y: 0.0, z: 0.0 }] {
-            let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-            let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };
+            let (status, point) = eval(surface, p);
             let n = point.normal;
-            let len = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+            let len = length(n);
             assert!(status != mf_status::MF_OK || (len - 1.0).abs() <= 1e-6 && !point.f.is_nan(), "{name} at {p:?}: {point:?}");
         }
         unsafe { mf_surface_free(surface) };
@@ -132,20 +161,18 @@ fn tiny_offsets_and_tiny_meshes() {
     let pole = mf_vec3 { x: 0.0, y: 0.0, z: 1.0 };
     assert_eq!(unsafe { mf_surface_new_sphere(center, 5.688840528388324, false, pole, &mut sphere) }, mf_status::MF_OK);
     let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-    assert_eq!(unsafe { mf_surface_eval(sphere, ptr::null_mut(), zero, &mut point) }, mf_status::MF_OK);
+    let (status, point) = eval(sphere, zero);
+    assert_eq!(status, mf_status::MF_OK);
     let n = point.normal;
-    assert!(((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() <= 1e-15, "{point:?}");
+    assert!((length(n) - 1.0).abs() <= 1e-15, "{point:?}");
     assert_eq!((n.x, n.y, n.z), (0.0, 0.0, -1.0), "{point:?}");
     unsafe { mf_surface_free(sphere) };
 
     let positions = [0.0, 2.884e-320, 0.0, 0.0, 2.884e-320, 0.0, 0.0, 0.0, 2.884e-320];
     let normals = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
     let uvs = [0.0; 6];
-    let indices = [0u32, 1, 2];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 3, indices: indices.as_ptr(), triangle_count: 1, normals: normals.as_ptr(), uvs: uvs.as_ptr() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_ERROR_INVALID_ARGUMENT);
+    let (status, surface) = new_mesh(&positions, &[0, 1, 2], Some(&normals), Some(&uvs));
+    assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT);
     assert!(surface.is_null());
     let message = last_error();
     assert!(message.contains("smallest length"), "{message}");
@@ -159,19 +186,15 @@ fn tiny_offsets_and_tiny_meshes() {
 #[test]
 fn far_point_has_a_unit_normal() {
     let (positions, indices) = tetrahedron(1.0);
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
-    let (mut mesh_surface, mut sphere_surface) = (ptr::null_mut(), ptr::null_mut());
+    let mesh_surface = accepted_mesh(&positions, &indices, None);
+    let mut sphere_surface = ptr::null_mut();
     let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-    unsafe {
-        assert_eq!(mf_surface_new_mesh(&mesh, &mut mesh_surface), mf_status::MF_OK);
-        assert_eq!(mf_surface_new_sphere(zero, 1.0, false, mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, &mut sphere_surface), mf_status::MF_OK);
-    }
+    assert_eq!(unsafe { mf_surface_new_sphere(zero, 1.0, false, mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, &mut sphere_surface) }, mf_status::MF_OK);
     for (name, surface) in [("mesh", mesh_surface), ("sphere", sphere_surface)] {
         for p in [mf_vec3 { x: 1.0650001015113206e304, y: 1e-320, z: 0.0 }, mf_vec3 { x: 1e200, y: 1e200, z: 0.0 }] {
-            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-            let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };
+            let (status, point) = eval(surface, p);
             let n = point.normal;
-            let len = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+            let len = length(n);
             assert!(status != mf_status::MF_OK || (len - 1.0).abs() <= 1e-6 && !point.f.is_nan(), "{name} at {p:?}: {point:?}");
         }
     }
@@ -191,16 +214,13 @@ fn mesh_uvs_never_give_a_non_finite_tangent() {
     let s = 5.645309114862115e50;
     let (positions, indices) = tetrahedron(s);
     let uvs = [0.9999999999991047, -9.999999999997382e307, 0.035162057122917534, 0.5, 1.3233858453531866e-13, 0.0, 0.0, 0.0];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: uvs.as_ptr() };
-    let mut surface = ptr::null_mut();
-    let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+    let (status, surface) = new_mesh(&positions, &indices, None, Some(&uvs));
     if status == mf_status::MF_ERROR_INVALID_ARGUMENT {
         return;
     }
     assert_eq!(status, mf_status::MF_OK);
     let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-    let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), zero, &mut point) };
+    let (status, point) = eval(surface, zero);
     let t = point.tangent;
     assert!(status != mf_status::MF_OK || [t.x, t.y, t.z, point.u, point.v].iter().all(|x| x.is_finite()), "{point:?}");
     unsafe { mf_surface_free(surface) };
@@ -267,7 +287,7 @@ unsafe extern "C" fn counted_sphere(user_data: *mut std::ffi::c_void, p: mf_vec3
     if *calls > MAX_CALLS {
         return 1;
     }
-    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let r = length(p);
     let n = if r > 0.0 { mf_vec3 { x: p.x / r, y: p.y / r, z: p.z / r } } else { mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
     unsafe { *out = mf_surface_point { f: r - RADIUS, normal: n, tangent: mf_vec3 { x: 1.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
     0
@@ -305,16 +325,11 @@ fn free_flight_from_deep_inside_a_thin_medium_ends() {
 /// mesh's bounding box `f` is now positive.
 #[test]
 fn mesh_far_away_is_outside() {
-    let a = 1000.0000000010001;
-    let positions = [a, a, a, a, -a, -a, -a, a, -a, -a, -a, a];
-    let indices = [0u32, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
-    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let (positions, indices) = tetrahedron(1000.0000000010001);
+    let surface = accepted_mesh(&positions, &indices, None);
     for p in [mf_vec3 { x: -1.0316227766019487e47, y: -1.0316227766019487e47, z: 1.1928851295354665e45 }, mf_vec3 { x: 1e20, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: -3e30, z: 2e30 }] {
-        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) }, mf_status::MF_OK);
+        let (status, point) = eval(surface, p);
+        assert_eq!(status, mf_status::MF_OK);
         assert!(point.f > 0.0, "f({p:?}) = {}", point.f);
     }
     unsafe { mf_surface_free(surface) };
@@ -325,7 +340,7 @@ fn mesh_far_away_is_outside() {
 unsafe extern "C" fn sphere_with_bad_tangent(user_data: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
     let calls = unsafe { &mut *(user_data as *mut u64) };
     *calls += 1;
-    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let r = length(p);
     let tangent = if *calls >= 2 { f64::INFINITY } else { 0.0 };
     unsafe { *out = mf_surface_point { f: r - 1.0, normal: mf_vec3 { x: p.x / r, y: p.y / r, z: p.z / r }, tangent: mf_vec3 { x: tangent, y: 1.0, z: 0.0 }, u: 0.0, v: 0.0 } };
     0
@@ -409,18 +424,12 @@ fn plane_majorant_holds_at_rounded_positions() {
 #[test]
 fn mesh_evaluated_beyond_overflow() {
     let s = 3.0193516770859723e49;
-    let positions = [0.0, s, 0.0, 0.0, s, 0.0, 0.0, 0.0, s];
-    let indices = [0u32, 1, 2];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 3, indices: indices.as_ptr(), triangle_count: 1, normals: ptr::null(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
-    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let surface = accepted_mesh(&[0.0, s, 0.0, 0.0, s, 0.0, 0.0, 0.0, s], &[0, 1, 2], None);
     for p in [mf_vec3 { x: 1e300, y: 1e300, z: 1e300 }, mf_vec3 { x: -1e300, y: 0.0, z: 0.0 }, mf_vec3 { x: 0.0, y: -1e308, z: 1e308 }] {
-        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-        let status = unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) };
+        let (status, point) = eval(surface, p);
         assert_eq!(status, mf_status::MF_OK, "{p:?}: {}", last_error());
         let n = point.normal;
-        assert!(point.f > 0.0 && ((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() < 1e-12, "{p:?}: {point:?}");
+        assert!(point.f > 0.0 && (length(n) - 1.0).abs() < 1e-12, "{p:?}: {point:?}");
     }
     unsafe { mf_surface_free(surface) };
 }
@@ -446,7 +455,7 @@ fn collision_frame_is_unit() {
     let c = unsafe { c.assume_init() };
     assert!(c.scattered, "{c:?}");
     let n = c.frame.normal;
-    assert!(((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() <= 1e-15, "{c:?}");
+    assert!((length(n) - 1.0).abs() <= 1e-15, "{c:?}");
     unsafe {
         mf_surface_free(surface);
         mf_medium_free(m);
@@ -486,12 +495,11 @@ fn enclosure_vertices(surface: *const mf_surface, level: f64, cell: f64) -> Vec<
     assert_eq!(unsafe { mf_enclosure_mesh(enclosure, mesh.as_mut_ptr()) }, mf_status::MF_OK);
     let mesh = unsafe { mesh.assume_init() };
     assert!(mesh.triangle_count > 0);
-    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
     let vertices = unsafe { std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertex_count) }
         .chunks_exact(3)
         .map(|v| {
-            let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-            assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), mf_vec3 { x: v[0], y: v[1], z: v[2] }, &mut point) }, mf_status::MF_OK);
+            let (status, point) = eval(surface, mf_vec3 { x: v[0], y: v[1], z: v[2] });
+            assert_eq!(status, mf_status::MF_OK);
             ([v[0], v[1], v[2]], point.f)
         })
         .collect();
@@ -635,9 +643,7 @@ fn enclosure_far_from_the_origin_contains_the_region() {
 fn mesh_normal_rounding_stays_inside_the_bound() {
     let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730953e-56)], &[("distribution", "beckmann")]);
     let (positions, indices) = tetrahedron(2.999998978784814e-46);
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let surface = accepted_mesh(&positions, &indices, None);
     let origin = mf_vec3 { x: 0.0, y: 0.0, z: 2.999998978781814e-46 };
     let d = mf_vec3 { x: -1.9883817500012286e-6, y: 1.0334886555964507e-6, z: 0.9999999999974891 };
     let counts = violations(m, surface, origin, d, 1.2118579560936542e-45, (0..2000).chain([42887017611264]));
@@ -705,7 +711,7 @@ fn enclosure_grid_beyond_f64_is_refused() {
 /// A host sphere of radius 0 at the origin, `f = |p|` computed plainly (its squares underflow for
 /// coordinates below ~1e-154, as a host's would).
 unsafe extern "C" fn point_sphere(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut mf_surface_point) -> i32 {
-    let r = (p.x * p.x + p.y * p.y + p.z * p.z).sqrt();
+    let r = length(p);
     let n = if r > 0.0 { mf_vec3 { x: p.x / r, y: p.y / r, z: p.z / r } } else { mf_vec3 { x: 0.0, y: 0.0, z: 1.0 } };
     unsafe { *out = mf_surface_point { f: r, normal: n, tangent: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, u: 0.0, v: 0.0 } };
     0
@@ -754,13 +760,9 @@ fn enclosure_grid_offsets_stay_finite() {
 #[test]
 fn empty_segments_deep_inside_a_mesh_grow() {
     let m = medium(&[("sigma", 1e-50), ("shell_extent", 9.99999999999e-4), ("alpha", 1e-6)], &[("distribution", "beckmann")]);
-    let a = 1000.0000000010001;
-    let positions = [a, 0.0, 0.0, -a, 0.0, 0.0, 0.0, a, 0.0, 0.0, -a, 0.0, 0.0, 0.0, a, 0.0, 0.0, -a];
-    let normals = positions.map(|x| x / a);
-    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: normals.as_ptr(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let (positions, indices) = octahedron(1000.0000000010001);
+    let (normals, _) = octahedron(1.0);
+    let surface = accepted_mesh(&positions, &indices, Some(&normals));
     let q = mf_track_query { origin: mf_vec3 { x: -0.0002730159346467071, y: 0.00025508563872220756, z: 138.41286895550982 }, d: mf_vec3 { x: 0.0, y: 1.0, z: 0.0 }, t_max: 78.1264188243673, seed: 16276397599167177057 };
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
@@ -805,13 +807,9 @@ fn segment_below_the_rounding_of_t_stops_the_call() {
 /// is accepted.
 #[test]
 fn inside_out_mesh_is_refused() {
-    let octahedron = [1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
-    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
     for scale in [3.0, -3.0] {
-        let positions = octahedron.map(|x| scale * x);
-        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: ptr::null(), uvs: ptr::null() };
-        let mut surface = ptr::null_mut();
-        let status = unsafe { mf_surface_new_mesh(&mesh, &mut surface) };
+        let (positions, indices) = octahedron(scale);
+        let (status, surface) = new_mesh(&positions, &indices, None, None);
         if scale > 0.0 {
             assert_eq!(status, mf_status::MF_OK, "{}", last_error());
             unsafe { mf_surface_free(surface) };
@@ -831,13 +829,11 @@ fn inside_out_mesh_is_refused() {
 fn inconsistent_winding_is_refused() {
     let s = 1096.9295554501955;
     let triangle = [s, 0.0, 0.0, 0.0, s, 0.0, 0.0, 0.0, s];
-    let octahedron = [1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
-    let flipped_one = [0u32, 4, 2, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+    let (octahedron, mut flipped_one) = octahedron(1.0);
+    flipped_one.swap(1, 2);
     let cases: [(&[f64], &[u32]); 3] = [(&triangle, &[0, 1, 2, 0, 1, 2]), (&triangle, &[0, 2, 1, 0, 2, 1]), (&octahedron, &flipped_one)];
     for (positions, indices) in cases {
-        let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: ptr::null(), uvs: ptr::null() };
-        let mut surface = ptr::null_mut();
-        assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_ERROR_INVALID_ARGUMENT, "{indices:?}");
+        assert_eq!(new_mesh(positions, indices, None, None).0, mf_status::MF_ERROR_INVALID_ARGUMENT, "{indices:?}");
         assert!(last_error().contains("winding is inconsistent"), "{indices:?}: {}", last_error());
     }
 }
@@ -851,10 +847,10 @@ fn tiny_sphere_pole_is_a_unit_normal() {
     for pole in [mf_vec3 { x: 1.7721047679881543e-162, y: 0.0, z: 0.0 }, mf_vec3 { x: 1.7721047679881543e-162, y: -2.975777e-298, z: 1e-163 }] {
         let mut sphere = ptr::null_mut();
         assert_eq!(unsafe { mf_surface_new_sphere(zero, 2.858251005505063e-17, true, pole, &mut sphere) }, mf_status::MF_OK);
-        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-        assert_eq!(unsafe { mf_surface_eval(sphere, ptr::null_mut(), zero, &mut point) }, mf_status::MF_OK);
+        let (status, point) = eval(sphere, zero);
+        assert_eq!(status, mf_status::MF_OK);
         let n = point.normal;
-        let length = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+        let length = length(n);
         assert!((length - 1.0).abs() < 1e-12, "{pole:?}: normal {n:?}, length {length}");
         unsafe { mf_surface_free(sphere) };
     }
@@ -867,18 +863,14 @@ fn tiny_sphere_pole_is_a_unit_normal() {
 #[test]
 fn mesh_seen_from_the_end_of_f64() {
     let m = medium(&[("sigma", 1e50), ("alpha", 1e-6)], &[("distribution", "beckmann")]);
-    let unit = [1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
-    let positions = unit.map(|x| 2.0 * x);
-    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: unit.as_ptr(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK);
+    let (positions, indices) = octahedron(2.0);
+    let (unit, _) = octahedron(1.0);
+    let surface = accepted_mesh(&positions, &indices, Some(&unit));
     let origin = mf_vec3 { x: -9.999999999997382e307, y: -8.524953868804761e-198, z: -1.7976931348623157e308 };
-    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
-    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-    assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), origin, &mut point) }, mf_status::MF_OK, "{}", last_error());
+    let (status, point) = eval(surface, origin);
+    assert_eq!(status, mf_status::MF_OK, "{}", last_error());
     let n = point.normal;
-    assert!(point.f > 0.0 && ((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() < 1e-12, "{point:?}");
+    assert!(point.f > 0.0 && (length(n) - 1.0).abs() < 1e-12, "{point:?}");
     let q = mf_track_query { origin, d: mf_vec3 { x: 6.9510363278929e-7, y: 0.0, z: 0.9999999999997584 }, t_max: f64::INFINITY, seed: 0 };
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
@@ -967,17 +959,14 @@ fn field_sigma_max_beyond_the_domain_is_refused() {
 #[test]
 fn mesh_normal_near_an_edge_is_unit() {
     let s = 1.4504026155174787e-50;
-    let positions = [-7.796264947706224e-196, -1.1116935433363922e-35, -2.8247524380560736e-185, -s, 0.0, 0.0, 0.0, s, 0.0, 0.0, -s, 0.0, 0.0, 0.0, s, 0.0, 0.0, -s];
-    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: ptr::null(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK, "{}", last_error());
-    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let (mut positions, indices) = octahedron(s);
+    positions[..3].copy_from_slice(&[-7.796264947706224e-196, -1.1116935433363922e-35, -2.8247524380560736e-185]);
+    let surface = accepted_mesh(&positions, &indices, None);
     let p = mf_vec3 { x: -6.611290867050549e-50, y: -6.597909937255984e-50, z: -1.1597177579103332e-49 };
-    let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-    assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) }, mf_status::MF_OK, "{}", last_error());
+    let (status, point) = eval(surface, p);
+    assert_eq!(status, mf_status::MF_OK, "{}", last_error());
     let n = point.normal;
-    let length = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+    let length = length(n);
     assert!((length - 1.0).abs() < 1e-12, "normal {n:?}, length {length}");
     unsafe { mf_surface_free(surface) };
 }
@@ -990,21 +979,18 @@ fn mesh_normal_near_an_edge_is_unit() {
 fn sliver_triangles_have_a_closest_point() {
     let s = 5.399562187234506e-37;
     let positions = [-s, 0.0, 0.0, -s, 0.0, 0.0, 0.0, -s, 0.0, 0.0, -s, 0.0, 40.0, -2.0762999195102028, 1.2760930781151428e-261, 0.0, 0.0, -s];
-    let indices = [0u32, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: ptr::null(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK, "{}", last_error());
-    let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    let (_, indices) = octahedron(s);
+    let surface = accepted_mesh(&positions, &indices, None);
     // The point of the artifact, then points around the mesh at its two scales.
     let mut rng = macrofacet::rng::Pcg32::new(5, 0);
     for k in 0..20_000 {
         let scale = [1e-37, 1e-36, 1e-30, 1.0, 40.0][k % 5];
         let random = mf_vec3 { x: (2.0 * rng.next_f64() - 0.5) * scale, y: (2.0 * rng.next_f64() - 1.0) * scale, z: (2.0 * rng.next_f64() - 1.0) * scale };
         let p = if k == 0 { mf_vec3 { x: 6.0, y: 6.0, z: -3.6470587769508733 } } else { random };
-        let mut point = mf_surface_point { f: 0.0, normal: zero, tangent: zero, u: 0.0, v: 0.0 };
-        assert_eq!(unsafe { mf_surface_eval(surface, ptr::null_mut(), p, &mut point) }, mf_status::MF_OK, "{p:?}: {}", last_error());
+        let (status, point) = eval(surface, p);
+        assert_eq!(status, mf_status::MF_OK, "{p:?}: {}", last_error());
         let n = point.normal;
-        assert!(!point.f.is_nan() && ((n.x * n.x + n.y * n.y + n.z * n.z).sqrt() - 1.0).abs() < 1e-9, "{p:?}: {point:?}");
+        assert!(!point.f.is_nan() && (length(n) - 1.0).abs() < 1e-9, "{p:?}: {point:?}");
     }
     unsafe { mf_surface_free(surface) };
 }
@@ -1017,11 +1003,9 @@ fn sliver_triangles_have_a_closest_point() {
 fn segment_bound_keeps_a_candidate() {
     let m = medium(&[("sigma", 3.0), ("alpha", 1e-6)], &[("distribution", "ggx")]);
     let a = 0.9000000004163026;
-    let positions = [-2954598395594.5703, -2169866234929.383, -2955209234974.085, a, -a, -a, -a, a, -a, -a, -a, a];
-    let indices = [0u32, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2];
-    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 4, indices: indices.as_ptr(), triangle_count: 4, normals: ptr::null(), uvs: ptr::null() };
-    let mut surface = ptr::null_mut();
-    assert_eq!(unsafe { mf_surface_new_mesh(&mesh, &mut surface) }, mf_status::MF_OK, "{}", last_error());
+    let (mut positions, indices) = tetrahedron(a);
+    positions[..3].copy_from_slice(&[-2954598395594.5703, -2169866234929.383, -2955209234974.085]);
+    let surface = accepted_mesh(&positions, &indices, None);
     let origin = mf_vec3 { x: -1.4947998053850968, y: 0.4235294119557993, z: 0.42352941196061145 };
     let d = mf_vec3 { x: -0.9826117664013281, y: -0.1836819729199024, z: 0.027113972215260865 };
     for seed in (0..200).chain([18446744073709520775]) {

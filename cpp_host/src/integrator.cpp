@@ -16,8 +16,12 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
         SurfaceHit h;
         bool hit = scene_.intersect(r, &h);
         float seg = hit ? h.t : dist;
-        if (vol && medium) {
-            T *= medium->transmittance(r, seg, sampler);
+        if (vol) {
+            if (medium) T *= medium->transmittance(r, seg, sampler);
+            for (const SuperposedMedium& m : scene_.superposed_media()) {
+                if (T.is_black()) break;
+                T *= m.transmittance(r, seg, sampler);
+            }
             if (T.is_black()) return T;
         }
         if (!hit) return T;
@@ -109,14 +113,37 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         SurfaceHit hit;
         bool found = scene_.intersect(ray, &hit);
 
-        // ---- medium: free flight up to the surface (or infinity)
+        // ---- media: free flights up to the surface (or infinity). The superposed media and the
+        // current one are independent exponential flights: the nearest collision wins, so each is
+        // sampled up to the nearest so far (Scene::add_superposed_medium).
         const MediumInteraction* from = from_medium_event ? &last_event : nullptr;
         from_medium_event = false;
-        if (medium) {
+        if (vol && (medium || !scene_.superposed_media().empty())) {
             MediumInteraction mi;
-            Rgb w, pr;
+            Rgb w(1.0f), pr(1.0f);
             float tmax = found ? hit.t : kInf;
-            bool scattered = medium->sample_free_flight(ray, tmax, from, hero, sampler, &mi, &w, &pr);
+            const Medium* scattering = nullptr;
+            for (const SuperposedMedium& m : scene_.superposed_media()) {
+                MediumInteraction mi_m;
+                Rgb w_m, pr_m;
+                if (m.sample_free_flight(ray, tmax, from && from->medium == m.medium() ? from : nullptr, hero, sampler, &mi_m, &w_m, &pr_m)) {
+                    mi = mi_m;
+                    tmax = mi.t;
+                    scattering = m.medium();
+                }
+                w *= w_m;
+                pr *= pr_m;
+            }
+            if (medium) {
+                MediumInteraction mi_m;
+                Rgb w_m, pr_m;
+                if (medium->sample_free_flight(ray, tmax, from, hero, sampler, &mi_m, &w_m, &pr_m)) {
+                    mi = mi_m;
+                    scattering = medium;
+                }
+                w *= w_m;
+                pr *= pr_m;
+            }
             beta *= w;
             ratio *= pr;
             if (beta.is_black() || !beta.finite() || !(ratio.average() > 0)) break;
@@ -125,9 +152,9 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 beta = beta / a;
                 ratio = ratio / a;
             }
-            if (scattered) {
+            if (scattering) {
                 if (cfg.max_depth >= 0 && depth + 1 >= cfg.max_depth) break;
-                const PhaseFunction& ph = medium->phase();
+                const PhaseFunction& ph = scattering->phase();
                 Vec3 wo = -ray.d;
                 if (!ph.is_delta())
                     L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {

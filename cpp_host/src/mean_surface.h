@@ -12,6 +12,8 @@
 // band for gpis). Embree sees a null-BSDF boundary whose interior is the medium: the exact offset
 // sphere for spheres, otherwise the library's conservative enclosure (mf_surface_enclosure: grid
 // cells that may meet the region), so no ray marches the signed distance to find the shell.
+// (In scenes whose macrofacet media sit in vacuum, a sphere's boundary is the chord each ray is
+// tracked over instead of a surface in the BVH: SuperposedMedium in scene.h.)
 #pragma once
 
 #include <memory>

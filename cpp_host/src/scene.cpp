@@ -1,6 +1,7 @@
 // mfhost — scene and Embree plumbing (see scene.h).
 #include "scene.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "error.h"
@@ -48,6 +49,43 @@ void Scene::add_shape(std::shared_ptr<Shape> s) {
     by_geom_id_[id] = s.get();
     bounds_.expand(s->bounds());
     shapes_.push_back(std::move(s));
+}
+
+bool SuperposedMedium::clip(const Ray& ray, float t_max, Ray* inside, float* t0, float* length) const {
+    double lo, hi;
+    if (!region_->chord(ray.o, ray.d, double(region_->radius()) * (1.0 + kRegionMargin), &lo, &hi)) return false;
+    lo = std::max(lo, 0.0);
+    hi = std::min(hi, double(t_max));
+    if (!(lo < hi)) return false;
+    *t0 = float(lo);
+    *length = float(hi - lo);
+    *inside = Ray(ray.at(*t0), ray.d);
+    return true;
+}
+
+bool SuperposedMedium::sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
+                                          MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const {
+    Ray inside;
+    float t0, length;
+    if (!clip(ray, t_max, &inside, &t0, &length)) {
+        *weight = *pdf_ratio = Rgb(1.0f);
+        return false;
+    }
+    if (!medium_->sample_free_flight(inside, length, from, channel, sampler, mi, weight, pdf_ratio)) return false;
+    mi->t += t0;
+    return true;
+}
+
+Rgb SuperposedMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
+    Ray inside;
+    float t0, length;
+    if (!clip(ray, t_max, &inside, &t0, &length)) return Rgb(1.0f);
+    return medium_->transmittance(inside, length, sampler);
+}
+
+void Scene::add_superposed_medium(SuperposedMedium m) {
+    bounds_.expand(m.region().bounds());
+    superposed_.push_back(std::move(m));
 }
 
 void Scene::add_emitter(std::shared_ptr<Emitter> e) {

@@ -43,6 +43,32 @@ struct IntegratorSettings {
     LightSampling light_sampling = LightSampling::Mis;  // not in the XML (Mitsuba 3.9.1 has no such parameter)
 };
 
+/// A medium present wherever a ray goes, whose extinction vanishes outside the sphere `region`:
+/// a macrofacet medium in vacuum (above its shell's top, sigma_t = 0), tracked over the chord of
+/// its region along every ray instead of behind a boundary in the BVH, which costs a ray two
+/// crossings, each an Embree traversal, per pass through a shell (issue 8). The chord is widened
+/// by kRegionMargin of the radius for the boundary's float rounding.
+class SuperposedMedium {
+public:
+    SuperposedMedium(const Medium* medium, std::shared_ptr<const SphereShape> region)
+        : medium_(medium), region_(std::move(region)) {}
+    const Medium* medium() const { return medium_; }
+    const SphereShape& region() const { return *region_; }
+    /// Medium::sample_free_flight over the part of [0, t_max] inside the region (*weight and
+    /// *pdf_ratio are 1 when the ray misses it).
+    bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
+                            MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const;
+    /// Medium::transmittance over the part of [0, t_max] inside the region.
+    Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const;
+
+private:
+    static constexpr double kRegionMargin = 1e-4;
+    /// The part [t0, t1] of [0, t_max] inside the region, as a ray starting at t0; false if empty.
+    bool clip(const Ray& ray, float t_max, Ray* inside, float* t0, float* length) const;
+    const Medium* medium_;
+    std::shared_ptr<const SphereShape> region_;
+};
+
 struct SceneSummary {
     size_t shapes = 0, triangles = 0, emitters = 0, media = 0;
 };
@@ -65,6 +91,8 @@ public:
     const std::vector<std::shared_ptr<Shape>>& shapes() const { return shapes_; }
     const std::vector<std::shared_ptr<Emitter>>& emitters() const { return emitters_; }
     const std::vector<const Emitter*>& infinite_emitters() const { return infinite_; }
+    void add_superposed_medium(SuperposedMedium m);
+    const std::vector<SuperposedMedium>& superposed_media() const { return superposed_; }
     const Aabb& bounds() const { return bounds_; }
     SceneSummary summary() const;
 
@@ -84,6 +112,7 @@ private:
     std::vector<const Shape*> by_geom_id_;
     std::vector<std::shared_ptr<Emitter>> emitters_;
     std::vector<const Emitter*> infinite_;
+    std::vector<SuperposedMedium> superposed_;
     Aabb bounds_;
 };
 

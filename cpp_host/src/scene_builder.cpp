@@ -71,6 +71,7 @@ public:
         if (opts_.spp_override > 0) scene_->spp = opts_.spp_override;
         if (opts_.seed_override >= 0) scene_->seed = uint64_t(opts_.seed_override);
         if (opts_.max_depth_override >= -1) scene_->integrator.max_depth = opts_.max_depth_override;
+        place_macrofacet_boundaries();
         for (auto& kv : media_) scene_->media.push_back(kv.second);
         scene_->content_hash = parsed.content_hash;
         scene_->commit();
@@ -162,7 +163,12 @@ private:
             try {
                 if (r.error) std::rethrow_exception(r.error);
                 scene_->media.push_back(r.medium);
-                scene_->add_shape(r.boundary);
+                if (r.gpis) {
+                    has_gpis_ = true;
+                    scene_->add_shape(r.boundary);
+                } else {
+                    macrofacet_boundaries_.push_back({r.boundary, r.medium});
+                }
             } catch (const Error& e) {
                 errors.add(e);
             }
@@ -173,6 +179,12 @@ private:
     const BuildOptions& opts_;
     BuildReport* report_;
     std::vector<PendingRegion> pending_;
+    struct MacrofacetBoundary {
+        std::shared_ptr<Shape> shape;
+        std::shared_ptr<const Medium> medium;
+    };
+    std::vector<MacrofacetBoundary> macrofacet_boundaries_;
+    bool has_gpis_ = false;
     std::unique_ptr<Scene> scene_;
     std::map<const SceneObject*, std::shared_ptr<Bsdf>> bsdfs_;
     std::map<const SceneObject*, std::shared_ptr<const Texture>> textures_;
@@ -878,7 +890,31 @@ private:
         }
         check_boundary(o, *boundary, *it->second);
         boundary->interior = it->second;
-        scene_->add_shape(boundary);
+        macrofacet_boundaries_.push_back({boundary, it->second});
+    }
+
+    /// Macrofacet media go into the BVH behind their boundaries or, when every one of them sits
+    /// in vacuum and the scene has no other medium, those bounded by a sphere are superposed
+    /// (SuperposedMedium): the same image without two boundary crossings per pass through a shell.
+    /// Their extinction vanishes above the shell's top, which the boundary contains
+    /// (make_region_boundary, check_boundary), so tracking each ray over its chord of the
+    /// boundary adds nothing. Another medium (a fog around a shell, a gpis medium, the camera's)
+    /// keeps the boundaries, whose crossings switch between media as in Mitsuba. Mesh boundaries
+    /// stay: their BVH finds where a ray meets the region faster than the library's bounding box.
+    void place_macrofacet_boundaries() {
+        bool superpose = opts_.superpose_macrofacet && media_.empty() && !has_gpis_;
+        for (const auto& b : macrofacet_boundaries_) superpose = superpose && !b.shape->exterior && !b.shape->exterior_bag;
+        std::map<const Medium*, int> boundaries_of;
+        for (const auto& b : macrofacet_boundaries_) ++boundaries_of[b.medium.get()];
+        for (const auto& b : macrofacet_boundaries_) {
+            // (a medium with several boundaries, as Mitsuba allows, keeps them: its region is their union)
+            auto sphere = std::dynamic_pointer_cast<const SphereShape>(b.shape);
+            if (superpose && sphere && !sphere->flipped() && boundaries_of[b.medium.get()] == 1)
+                scene_->add_superposed_medium(SuperposedMedium(b.medium.get(), sphere));
+            else
+                scene_->add_shape(b.shape);
+        }
+        macrofacet_boundaries_.clear();
     }
 
     /// Refuses a boundary that does not contain the medium's region: every vertex of a mesh (2048

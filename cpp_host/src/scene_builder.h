@@ -27,6 +27,10 @@ struct BuildOptions {
     /// Threads that build the media's mean surfaces and region boundaries (the costly part of
     /// loading a scene with mesh media), 0 = hardware concurrency. The scene does not depend on it.
     int threads = 0;
+    /// Superpose macrofacet media in vacuum instead of tracing their boundaries
+    /// (SceneBuilder::place_macrofacet_boundaries); false (mfrender --media-boundaries) keeps
+    /// the boundaries, for comparison: both render the same image.
+    bool superpose_macrofacet = true;
 };
 
 struct BuildReport {

@@ -142,18 +142,25 @@ void SphereShape::sample_position(const Vec2& u, Vec3* p, Vec3* n) const {
     *n = flip_ ? -d : d;
 }
 
-bool SphereShape::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float* t) const {
+bool SphereShape::chord(const Vec3& o, const Vec3& d, double radius, double* t0, double* t1) const {
     double ox = double(o.x) - c_.x, oy = double(o.y) - c_.y, oz = double(o.z) - c_.z;
     double a = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
     double b = ox * d.x + oy * d.y + oz * d.z;
-    double c = ox * ox + oy * oy + oz * oz - double(r_) * r_;
+    double c = ox * ox + oy * oy + oz * oz - radius * radius;
     double disc = b * b - a * c;
-    if (disc < 0) return false;
+    if (!(disc >= 0)) return false;
     double sq = std::sqrt(disc);
     // numerically stable roots
     double q = b > 0 ? -(b + sq) : -(b - sq);
-    double t0 = q / a, t1 = q != 0 ? c / q : t0;
-    if (t0 > t1) std::swap(t0, t1);
+    *t0 = q / a;
+    *t1 = q != 0 ? c / q : *t0;
+    if (*t0 > *t1) std::swap(*t0, *t1);
+    return true;
+}
+
+bool SphereShape::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float* t) const {
+    double t0, t1;
+    if (!chord(o, d, r_, &t0, &t1)) return false;
     if (t0 > tnear && t0 < tfar) { *t = float(t0); return true; }
     if (t1 > tnear && t1 < tfar) { *t = float(t1); return true; }
     return false;

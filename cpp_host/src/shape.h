@@ -144,6 +144,9 @@ public:
     Vec3 pole() const { return normalize(rot_.vector(Vec3(0, 0, 1))); }
     /// Exact ray–sphere intersection in double precision; smallest root in (tnear, tfar).
     bool intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float* t) const;
+    /// Both roots t0 <= t1 of the line o + t d on the sphere of radius `radius` around the centre
+    /// (double precision, numerically stable); false when the line misses it.
+    bool chord(const Vec3& o, const Vec3& d, double radius, double* t0, double* t1) const;
 
 private:
     /// Local unit direction of world point p (Mitsuba's to_object(p), normalised).

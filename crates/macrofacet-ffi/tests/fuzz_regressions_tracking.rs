@@ -752,6 +752,41 @@ fn enclosure_grid_offsets_stay_finite() {
     unsafe { mf_surface_free(surface) };
 }
 
+/// `fuzz/artifacts/fields/crash-0de418821a7eefcf9246d66d2d07661e4aaee241`: gpss α = 1e-6,
+/// σ = 1e50, a flipped sphere of radius 3e49 around (−1e300, −1e300, −1e300), tracked from its
+/// centre. 1.4e284 along the ray the points' coordinates are rounded by 1.5e284: a tentative
+/// collision's normal was 60° off the segment's range of d·n, and σ_t broke the majorant; f there
+/// was −inf (|p − c|² overflowed). The sphere's d·n range now widens by that rounding at the
+/// segment's closest approach to the centre, and its distances do not overflow.
+#[test]
+fn sphere_normals_rounded_near_the_centre() {
+    let m = medium(&[("sigma", 1e50), ("alpha", 1e-6)], &[("distribution", "gpss")]);
+    let centre = mf_vec3 { x: -1e300, y: -1e300, z: -1e300 };
+    let mut sphere = ptr::null_mut();
+    assert_eq!(unsafe { mf_surface_new_sphere(centre, 3.0000008156029367e49, true, centre, &mut sphere) }, mf_status::MF_OK);
+    let (status, point) = eval(sphere, mf_vec3 { x: -1e300, y: -9.999999999999999e299, z: -1e300 });
+    assert_eq!(status, mf_status::MF_OK);
+    assert!(point.f.is_finite() && point.f < -1e284, "{point:?}");
+    let d = mf_vec3 { x: -0.3617261560819874, y: 0.8546118510735646, z: 0.37254901960784315 };
+    let mut counts = [0u32; 2];
+    for seed in (0..20).chain([5787213827046133840]) {
+        let q = mf_track_query { origin: centre, d, t_max: f64::INFINITY, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        if unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) } == mf_status::MF_OK {
+            counts[0] += unsafe { c.assume_init() }.stats.majorant_violations;
+        }
+        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
+        if unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) } == mf_status::MF_OK {
+            counts[1] += t.stats.majorant_violations;
+        }
+    }
+    assert_eq!(counts, [0, 0], "majorant violations in free flights and transmittance");
+    unsafe {
+        mf_surface_free(sphere);
+        mf_medium_free(m);
+    }
+}
+
 /// `fuzz/corpus/tracking/b7f8d8b1…` (1.2 s per run): σ = 1e-50, Beckmann α = 1e-6, a ray deep
 /// inside an octahedron of size 1000 (f ≈ −497), moving outward, where the majorant is 0. Each
 /// empty segment asks for twice its length, but the tracker halved it back for looseness that

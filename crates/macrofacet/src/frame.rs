@@ -71,6 +71,15 @@ pub(crate) fn rescaled(v: DVec3) -> DVec3 {
     v * 2f64.powi(-exponent)
 }
 
+/// `|v|` without the overflow or underflow of `|v|²` beyond 1e±154.
+pub(crate) fn robust_length(v: DVec3) -> f64 {
+    let largest = v.abs().max_element();
+    if largest == 0.0 || !largest.is_finite() || (NO_RESCALE_MIN..=NO_RESCALE_MAX).contains(&largest) {
+        return v.length();
+    }
+    largest * (v / largest).length()
+}
+
 /// Rejects NaN or infinite components; the message names `name`.
 pub fn check_finite_vector(name: &str, v: DVec3) -> Result<DVec3> {
     if v.is_finite() {

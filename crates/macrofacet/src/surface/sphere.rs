@@ -4,7 +4,7 @@
 
 use super::{convex_bound, Aabb, Curvature, MeanSurface, SegmentBound, SurfacePoint};
 use crate::error::{check_positive, Error, ErrorKind, Result};
-use crate::frame::{check_finite_vector, rescaled};
+use crate::frame::{check_finite_vector, rescaled, robust_length};
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
@@ -43,7 +43,9 @@ impl MeanSurface for Sphere {
 
     fn point(&self, p: DVec3) -> Result<SurfacePoint> {
         let v = p - self.center;
-        let r = v.length();
+        // Without overflow: |v|² overflows from 1.3e154 on (found by fuzzing: a flipped sphere
+        // answered f = −inf 1.4e284 from its centre).
+        let r = robust_length(v);
         // At the centre every direction is a gradient; any unit vector keeps the frame valid.
         // Rescaled first: |v|² of a v shorter than 1e-154 loses its precision to underflow (a
         // point 4e-163 from the centre had a normal of length 0.9999955, found by fuzzing).
@@ -60,7 +62,21 @@ impl MeanSurface for Sphere {
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {
         let end = self.point(p + length * d)?;
         let curvature = if self.flip_normals { Curvature::Concave } else { Curvature::Convex };
-        Ok(convex_bound(start, &end, d, length, curvature))
+        let mut bound = convex_bound(start, &end, d, length, curvature);
+        // The normal (q − c)/|q − c| at a point q of the segment is rounded with q's coordinates,
+        // by up to ~4ε × coordinates / |q − c| (found by fuzzing: a flipped sphere of radius 3e49
+        // around (−1e300, −1e300, −1e300), tracked from its centre: a point 1.4e284 along the
+        // ray was rounded by 1.5e284, its normal 60° off the segment's d·n range, and the
+        // majorant broken). The range widens by that at the segment's closest approach to the
+        // centre (as the mesh's does at a piece's smallest distance).
+        let v = p - self.center;
+        let closest = robust_length(v + (-v.dot(d)).clamp(0.0, length) * d);
+        let coordinates = p.abs().max((p + length * d).abs()).max(self.center.abs()).max_element();
+        let rounding = 4.0 * f64::EPSILON * coordinates / closest;
+        if rounding > 0.0 {
+            bound.cos = [(bound.cos[0] - rounding).max(-1.0), (bound.cos[1] + rounding).min(1.0)];
+        }
+        Ok(bound)
     }
 
     /// The distance to the level sphere `|p − c| = r ± level`, shortened by the rounding of
@@ -69,7 +85,8 @@ impl MeanSurface for Sphere {
         let lipschitz = start.f - level;
         let v = p - self.center;
         let radius = self.radius + self.sign() * level;
-        if !(radius > 0.0) {
+        // (Where |v|² or the radius² overflow, the Lipschitz step stays.)
+        if !(radius > 0.0 && (v.length_squared() + radius * radius).is_finite()) {
             return lipschitz;
         }
         let b = v.dot(d);
@@ -87,7 +104,7 @@ impl MeanSurface for Sphere {
     }
 
     fn distance_bound(&self, p: DVec3) -> f64 {
-        ((p - self.center).length() - self.radius).abs()
+        (robust_length(p - self.center) - self.radius).abs()
     }
 
     fn bounding_box(&self) -> Aabb {

@@ -115,7 +115,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
 
         // ---- media: free flights up to the surface (or infinity). The superposed media and the
         // current one are independent exponential flights: the nearest collision wins, so each is
-        // sampled up to the nearest so far (Scene::add_superposed_medium).
+        // sampled up to the nearest so far (SuperposedMedium, scene.h).
         const MediumInteraction* from = from_medium_event ? &last_event : nullptr;
         from_medium_event = false;
         if (vol && (medium || !scene_.superposed_media().empty())) {

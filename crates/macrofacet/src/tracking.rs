@@ -237,6 +237,8 @@ enum Previous {
 /// A segment being tracked: where it starts along the ray, its bound and majorant lines.
 struct Segment {
     t: f64,
+    /// Where the segment starts: the point its bound and tentative collisions are computed from.
+    p: DVec3,
     bound: SegmentBound,
     /// The density shape of the majorant and control (the largest `σ` on the segment).
     shape: HeightProfile,
@@ -337,12 +339,12 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     /// Far above the shell, steps of `f − top` (the signed distance is 1-Lipschitz, so the shell
     /// cannot begin before): cheaper than bounding a long segment with many candidate features.
-    /// Returns the new position and its surface point.
+    /// Returns the new distance, position and surface point.
     /// Between exact queries the surface's cheap lower bound of `|f|` keeps the steps going: the
     /// ray stays above the top face (`f >= top > 0` after a step of `f − top`), so there `f` is at
     /// least that bound.
     #[allow(clippy::too_many_arguments)]
-    fn skip_above(&self, mut t: f64, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
+    fn skip_above(&self, mut t: f64, mut p: DVec3, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, DVec3, SurfacePoint)> {
         let (sigma, top) = (self.height().sigma, self.height().top());
         let threshold = top + SKIP_SIGMAS * sigma;
         let mut f = start.f;
@@ -352,11 +354,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 break;
             }
             // An exact query knows more than the Lipschitz bound when the surface does.
-            t += if exact { self.surface.clearance(&start, origin + t * d, d, top, cache) } else { f - top };
+            t += if exact { self.surface.clearance(&start, p, d, top, cache) } else { f - top };
             if !(t < t_exit) {
                 break;
             }
-            let p = origin + t * d;
+            p = origin + t * d;
             f = self.surface.distance_bound(p).max(top);
             exact = false;
             if !(f > threshold) {
@@ -366,16 +368,19 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             }
         }
         if !exact {
-            let p = origin + t * d;
             start = self.checked(self.surface.start_point(p, cache), p, stats)?;
         }
-        Ok((t, start))
+        Ok((t, p, start))
     }
 
     /// Asks the surface for the bound of the next segment, shortening it while it is loose.
+    /// `start` is the surface at `p`, exactly (the tracker never re-derives `p` from `t`: a
+    /// segment starts where the last one's bound ended, at `p + length d` as the surface computed
+    /// it, and the surface may rely on `start`'s sign there; found by fuzzing: `origin + t d` lay
+    /// 2e-16 inside a mesh's edge where the last bound's end point was 3e-17 outside, and the
+    /// mesh bounded the segment as outside, a majorant 3 times too low).
     #[allow(clippy::too_many_arguments)]
-    fn next_segment(&self, t: f64, start: &SurfacePoint, origin: DVec3, d: DVec3, remaining: f64, previous: Previous, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<Segment> {
-        let p = origin + t * d;
+    fn next_segment(&self, t: f64, p: DVec3, start: &SurfacePoint, d: DVec3, remaining: f64, previous: Previous, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<Segment> {
         let sigma = self.height().sigma;
         let mut length = self.segment_length(start, d, previous).min(remaining);
         let mut shortenings = 0;
@@ -475,14 +480,14 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 }
             }
             // The control's S_lo is only needed by transmittance; it sets it.
-            return Ok(Segment { t, bound, shape, s_up, s_lo: 0.0, params, shortened: shortenings + wide_shortenings > 0 });
+            return Ok(Segment { t, p, bound, shape, s_up, s_lo: 0.0, params, shortened: shortenings + wide_shortenings > 0 });
         }
     }
 
     /// `σ_t`, the surface point and the local parameters at the tentative collision `s` of
     /// `seg`, counted in `stats`.
-    fn at_tentative(&self, seg: &Segment, s: f64, origin: DVec3, d: DVec3, cache: &S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint, LocalParams)> {
-        let p = origin + (seg.t + s) * d;
+    fn at_tentative(&self, seg: &Segment, s: f64, d: DVec3, cache: &S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint, LocalParams)> {
+        let p = seg.p + s * d;
         let point = self.checked(self.surface.point_on_segment(p, cache), p, stats)?;
         let (sigma_t, local) = self.sigma_t_at(p, &point, d)?;
         stats.tentative_collisions += 1;
@@ -532,8 +537,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         seg.shape.invert_density_integral(f0 + slope * s, slope, seg.bound.length - s, target).map(|ds| s + ds)
     }
 
-    /// The start of the segment after `seg`: the bound's end point or a fresh query.
-    fn advance(&self, seg: &Segment, origin: DVec3, d: DVec3, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint)> {
+    /// The start of the segment after `seg` (distance, position and surface point): where its
+    /// bound ended, with the bound's end point or a fresh query.
+    fn advance(&self, seg: &Segment, origin: DVec3, d: DVec3, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, DVec3, SurfacePoint)> {
         let t = seg.t + seg.bound.length;
         // A segment below the rounding of t cannot move the ray: the next would be the same
         // (found by fuzzing: σ = 1e-50 with GGX α = 7e5 shortened every segment to 3e-87 at
@@ -547,7 +553,8 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 ),
             ));
         }
-        let p = origin + t * d;
+        // The point the surface computed the end at (`next_segment`).
+        let p = seg.p + seg.bound.length * d;
         let start = match seg.bound.end {
             // Validated with its bound (`next_segment`); counted as the query it saves.
             Some(end) => {
@@ -556,7 +563,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             }
             None => self.checked(self.surface.start_point(p, cache), p, stats)?,
         };
-        Ok((t, start))
+        Ok((t, p, start))
     }
 
     /// Samples a free flight along `origin + t d`, `t ∈ [0, t_max]` (`t_max` may be `+∞`), by
@@ -565,22 +572,23 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(TrackedFlight::Pass) };
         let mut cache = S::Cache::default();
         let mut t = t_enter;
-        let mut start = self.checked(self.surface.start_point(origin + t * d, &mut cache), origin + t * d, stats)?;
+        let mut p = origin + t * d;
+        let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;
         let mut previous = Previous::None;
         let mut budget = 0u64;
         for _ in 0..MAX_SEGMENTS {
-            (t, start) = self.skip_above(t, start, origin, d, t_exit, &mut cache, stats)?;
+            (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
                 return Ok(TrackedFlight::Pass);
             }
-            let seg = self.next_segment(t, &start, origin, d, t_exit - t, previous, &mut cache, stats)?;
+            let seg = self.next_segment(t, p, &start, d, t_exit - t, previous, &mut cache, stats)?;
             let mut s = 0.0;
             let mut tentative = false;
             while let Some(next) = self.next_tentative(&seg, s, rng) {
                 s = next;
                 tentative = true;
                 spend_tentative(&mut budget, origin, d)?;
-                let (sigma_t, point, local) = self.at_tentative(&seg, s, origin, d, &cache, stats)?;
+                let (sigma_t, point, local) = self.at_tentative(&seg, s, d, &cache, stats)?;
                 let mu = self.majorant(&seg, s);
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
@@ -593,7 +601,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 }
             }
             previous = self.previous(&seg, tentative);
-            (t, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
+            (t, p, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
         }
         Err(too_many_segments())
     }
@@ -604,16 +612,17 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(1.0) };
         let mut cache = S::Cache::default();
         let mut t = t_enter;
-        let mut start = self.checked(self.surface.start_point(origin + t * d, &mut cache), origin + t * d, stats)?;
+        let mut p = origin + t * d;
+        let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;
         let mut transmittance = 1.0;
         let mut previous = Previous::None;
         let mut budget = 0u64;
         for _ in 0..MAX_SEGMENTS {
-            (t, start) = self.skip_above(t, start, origin, d, t_exit, &mut cache, stats)?;
+            (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
                 return Ok(transmittance);
             }
-            let mut seg = self.next_segment(t, &start, origin, d, t_exit - t, previous, &mut cache, stats)?;
+            let mut seg = self.next_segment(t, p, &start, d, t_exit - t, previous, &mut cache, stats)?;
             // The control needs ρ(f_hi; σ) <= ρ(f; σ(p)): only with σ known on the segment (a
             // field whose σ varies there gets none; ratio tracking alone stays unbiased). The
             // projected area is smallest at the smallest roughness.
@@ -642,7 +651,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 if !(rng.next_f64() * mu < mu - mu_c) {
                     continue;
                 }
-                let (sigma_t, _, _) = self.at_tentative(&seg, s, origin, d, &cache, stats)?;
+                let (sigma_t, _, _) = self.at_tentative(&seg, s, d, &cache, stats)?;
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) || sigma_t < mu_c * (1.0 - VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
                 }
@@ -652,7 +661,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 }
             }
             previous = self.previous(&seg, tentative);
-            (t, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
+            (t, p, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
         }
         Err(too_many_segments())
     }

@@ -76,6 +76,14 @@ impl MeanSurface for Sphere {
         if rounding > 0.0 {
             bound.cos = [(bound.cos[0] - rounding).max(-1.0), (bound.cos[1] + rounding).min(1.0)];
         }
+        // f = |q − c| − r itself is rounded by a few ulps of the coordinates and of r, which for a
+        // sphere far larger than its shell exceeds σ (found by fuzzing: a sphere of radius 1.8e308
+        // around (0, 2, 1.8e308) answered f = 0 at a point 1e49 outside, σ = 1e50, and the
+        // majorant was broken). The bounds of f widen by that (the tracker adds the rounding of
+        // the points themselves).
+        let f_rounding = 8.0 * f64::EPSILON * coordinates.max(self.radius);
+        bound.f_lo = bound.f_lo.map(|f| f - f_rounding);
+        bound.f_hi = bound.f_hi.map(|f| f + f_rounding);
         Ok(bound)
     }
 

@@ -475,15 +475,27 @@ fn callback_surface(point: unsafe extern "C" fn(*mut std::ffi::c_void, mf_vec3, 
 /// Majorant violations of `mf_track_free_flight` and of `mf_track_transmittance` along one ray
 /// over `seeds` (every call must answer MF_OK).
 fn violations(m: *const mf_medium, surface: *const mf_surface, origin: mf_vec3, d: mf_vec3, t_max: f64, seeds: impl IntoIterator<Item = u64>) -> (u32, u32) {
+    violations_of_calls(m, surface, origin, d, t_max, seeds, false)
+}
+
+/// [`violations`], with calls that fail (the tentative cap's error, where rounding leaves the
+/// majorant too loose to finish) allowed when `errors_allowed`, and not counted.
+fn violations_of_calls(m: *const mf_medium, surface: *const mf_surface, origin: mf_vec3, d: mf_vec3, t_max: f64, seeds: impl IntoIterator<Item = u64>, errors_allowed: bool) -> (u32, u32) {
     let (mut free_flight, mut transmittance) = (0, 0);
     for seed in seeds {
         let q = mf_track_query { origin, d, t_max, seed };
         let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
-        assert_eq!(unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
+        let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
+        assert!(errors_allowed || status == mf_status::MF_OK, "{status:?}: {}", last_error());
+        if status == mf_status::MF_OK {
+            free_flight += unsafe { c.assume_init() }.stats.majorant_violations;
+        }
         let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
-        assert_eq!(unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{}", last_error());
-        free_flight += unsafe { c.assume_init() }.stats.majorant_violations;
-        transmittance += t.stats.majorant_violations;
+        let status = unsafe { mf_track_transmittance(m, surface, ptr::null(), ptr::null_mut(), &q, &mut t) };
+        assert!(errors_allowed || status == mf_status::MF_OK, "{status:?}: {}", last_error());
+        if status == mf_status::MF_OK {
+            transmittance += t.stats.majorant_violations;
+        }
     }
     (free_flight, transmittance)
 }
@@ -770,19 +782,8 @@ fn sphere_normals_rounded_near_the_centre() {
     assert_eq!(status, mf_status::MF_OK);
     assert!(point.f.is_finite() && point.f < -1e284, "{point:?}");
     let d = mf_vec3 { x: -0.3617261560819874, y: 0.8546118510735646, z: 0.37254901960784315 };
-    let mut counts = [0u32; 2];
-    for seed in (0..20).chain([5787213827046133840]) {
-        let q = mf_track_query { origin: centre, d, t_max: f64::INFINITY, seed };
-        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
-        if unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) } == mf_status::MF_OK {
-            counts[0] += unsafe { c.assume_init() }.stats.majorant_violations;
-        }
-        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
-        if unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) } == mf_status::MF_OK {
-            counts[1] += t.stats.majorant_violations;
-        }
-    }
-    assert_eq!(counts, [0, 0], "majorant violations in free flights and transmittance");
+    let counts = violations_of_calls(m, sphere, centre, d, f64::INFINITY, (0..20).chain([5787213827046133840]), true);
+    assert_eq!(counts, (0, 0), "majorant violations in free flights and transmittance");
     unsafe {
         mf_surface_free(sphere);
         mf_medium_free(m);
@@ -1097,19 +1098,8 @@ fn sphere_larger_than_its_rounding_keeps_its_majorant() {
     assert_eq!(unsafe { mf_surface_new_sphere(mf_vec3 { x: 0.0, y: 2.0, z: f64::MAX }, f64::MAX, false, pole, &mut sphere) }, mf_status::MF_OK);
     let origin = mf_vec3 { x: 0.00010553324773590148, y: 0.00013327550688079068, z: 3.273088311945043e-5 };
     let d = mf_vec3 { x: 0.9984251218556673, y: 0.011966078117535967, z: -0.05480957053271407 };
-    let mut counts = [0u32; 2];
-    for seed in (0..10).chain([2522065454634721540]) {
-        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed };
-        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
-        if unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) } == mf_status::MF_OK {
-            counts[0] += unsafe { c.assume_init() }.stats.majorant_violations;
-        }
-        let mut t = mf_transmittance { transmittance: -1.0, stats: mf_track_stats::default() };
-        if unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) } == mf_status::MF_OK {
-            counts[1] += t.stats.majorant_violations;
-        }
-    }
-    assert_eq!(counts, [0, 0], "majorant violations in free flights and transmittance");
+    let counts = violations_of_calls(m, sphere, origin, d, f64::INFINITY, (0..10).chain([2522065454634721540]), true);
+    assert_eq!(counts, (0, 0), "majorant violations in free flights and transmittance");
     unsafe {
         mf_surface_free(sphere);
         mf_medium_free(m);

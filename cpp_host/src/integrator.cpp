@@ -123,27 +123,21 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             Rgb w(1.0f), pr(1.0f);
             float tmax = found ? hit.t : kInf;
             const Medium* scattering = nullptr;
-            for (const SuperposedMedium& m : scene_.superposed_media()) {
+            // One medium's flight (a Medium or a SuperposedMedium) up to the nearest collision so
+            // far; `from` goes to the medium whose event the ray leaves.
+            auto fly = [&](const auto& flight, const Medium* owner) {
                 MediumInteraction mi_m;
                 Rgb w_m, pr_m;
-                if (m.sample_free_flight(ray, tmax, from && from->medium == m.medium() ? from : nullptr, hero, sampler, &mi_m, &w_m, &pr_m)) {
+                if (flight.sample_free_flight(ray, tmax, from && from->medium == owner ? from : nullptr, hero, sampler, &mi_m, &w_m, &pr_m)) {
                     mi = mi_m;
                     tmax = mi.t;
-                    scattering = m.medium();
+                    scattering = owner;
                 }
                 w *= w_m;
                 pr *= pr_m;
-            }
-            if (medium) {
-                MediumInteraction mi_m;
-                Rgb w_m, pr_m;
-                if (medium->sample_free_flight(ray, tmax, from, hero, sampler, &mi_m, &w_m, &pr_m)) {
-                    mi = mi_m;
-                    scattering = medium;
-                }
-                w *= w_m;
-                pr *= pr_m;
-            }
+            };
+            for (const SuperposedMedium& m : scene_.superposed_media()) fly(m, m.medium());
+            if (medium) fly(*medium, medium);
             beta *= w;
             ratio *= pr;
             if (beta.is_black() || !beta.finite() || !(ratio.average() > 0)) break;

@@ -650,7 +650,7 @@ fn enclosure_far_from_the_origin_contains_the_region() {
 /// normal. The frame normals near an edge, `(q − c)/|q − c|` at 2.5e-56 from it, are rounded by
 /// ~1e-5 rad (coordinates 3e-46 over the distance), beyond the segment bound's `d·n` range
 /// (padded by 1e-12): `d·n` = 1 − 3e-16 against a range ending at 1 − 5.8e-12, where this lobe's
-/// back-facing area is 0 while the exact lower bound (`Ndf::projected_area_range`) was 0.54:
+/// back-facing area is 0 while the exact lower bound (`Ndf::projected_area_bound`) was 0.54:
 /// the control exceeded `σ_t` in 896 of 2001 transmittance calls. The mesh's range now widens by
 /// that rounding at the piece's smallest distance (`src/surface/mesh/mod.rs`).
 #[test]

@@ -58,7 +58,11 @@ impl HeightProfile {
     /// `−(xb − xa)(xb + xa)/2 − ln(xb/xa)`, which stays finite or overflows to `±∞` as it should
     /// (found by fuzzing: a long segment far inside had τ = 0).
     fn ln_cdf_difference(&self, fa: f64, fb: f64) -> f64 {
-        let (ln_a, ln_b) = (self.ln_cdf(fa), self.ln_cdf(fb));
+        self.ln_cdf_difference_of(fa, fb, self.ln_cdf(fa), self.ln_cdf(fb))
+    }
+
+    /// [`Self::ln_cdf_difference`] with `ln_a = ln_cdf(fa)` and `ln_b = ln_cdf(fb)` known.
+    fn ln_cdf_difference_of(&self, fa: f64, fb: f64, ln_a: f64, ln_b: f64) -> f64 {
         if ln_a.is_finite() || ln_b.is_finite() {
             return ln_b - ln_a;
         }
@@ -149,7 +153,12 @@ impl HeightProfile {
             }
             if (f_end.min(top) - f_start).abs() > SMALL_DELTA * self.sigma {
                 let ln_start = self.ln_cdf(f_start);
-                let total = if f_end == f64::NEG_INFINITY { f64::INFINITY } else { (self.ln_cdf_difference(f_start, f_end.min(top)) / slope).max(0.0) };
+                let total = if f_end == f64::NEG_INFINITY {
+                    f64::INFINITY
+                } else {
+                    let f_end = f_end.min(top);
+                    (self.ln_cdf_difference_of(f_start, f_end, ln_start, self.ln_cdf(f_end)) / slope).max(0.0)
+                };
                 if !(target < total) {
                     return None;
                 }

@@ -30,7 +30,7 @@ use crate::field::{Constant, LocalParams, MediumField, ParamBounds};
 use crate::frame::Frame;
 use crate::height::HeightProfile;
 use crate::medium::MacrofacetMedium;
-use crate::ndf::{MicrofacetDistribution, Ndf};
+use crate::ndf::{MicrofacetDistribution, Ndf, Side};
 use crate::rng::Pcg32;
 use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
 use glam::DVec3;
@@ -135,37 +135,38 @@ impl ProjectedAreaBounds {
 
     /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent.
     /// `σ(d) = projected_area(−d_local)` sees `w_z = −d·n`. Where a closed form is monotone
-    /// ([`Ndf::projected_area_range`]: isotropic gpss, Beckmann, GGX up to α = 1) the range's
+    /// ([`Ndf::projected_area_bound`]: isotropic gpss, Beckmann, GGX up to α = 1) the range's
     /// extremes give it exactly; otherwise, over the angle interval, an L-Lipschitz function
     /// exceeds neither the larger end value by more than `L × width / 2` nor the midpoint value
     /// by more than that (one evaluation for narrow ranges).
     fn upper(&self, cos: [f64; 2]) -> f64 {
-        self.bound(&self.upper, cos, 1.0) * (1.0 + AREA_ROUNDING)
+        self.bound(&self.upper, cos, Side::Upper) * (1.0 + AREA_ROUNDING)
     }
 
     /// `S_lo <= σ(d_local)` over the same frames (at least 0).
     fn lower(&self, cos: [f64; 2]) -> f64 {
-        (self.bound(&self.lower, cos, -1.0) * (1.0 - AREA_ROUNDING)).max(0.0)
+        (self.bound(&self.lower, cos, Side::Lower) * (1.0 - AREA_ROUNDING)).max(0.0)
     }
 
-    fn bound(&self, ndf: &Ndf, cos: [f64; 2], side: f64) -> f64 {
+    fn bound(&self, ndf: &Ndf, cos: [f64; 2], side: Side) -> f64 {
         // Closed forms monotone over w_z = −d·n (and the spread): exact at the range's extremes,
         // the range widened by σ_t's rounding of d·n (COS_ROUNDING).
         let w_z = [(-cos[1] - COS_ROUNDING).max(-1.0), (-cos[0] + COS_ROUNDING).min(1.0)];
-        if let Some((upper, lower)) = ndf.projected_area_range(w_z) {
-            return if side > 0.0 { upper } else { lower };
+        if let Some(bound) = ndf.projected_area_bound(w_z, side) {
+            return bound;
         }
+        let sign = side.sign();
         let area = |theta: f64| {
             let (sin, cos) = theta.sin_cos();
             ndf.projected_area(DVec3::new(sin, 0.0, -cos))
         };
-        let extreme = |a: f64, b: f64| if side > 0.0 { a.max(b) } else { a.min(b) };
+        let extreme = |a: f64, b: f64| if side == Side::Upper { a.max(b) } else { a.min(b) };
         let (theta_lo, theta_hi) = (cos[1].clamp(-1.0, 1.0).acos(), cos[0].clamp(-1.0, 1.0).acos());
         let width = theta_hi - theta_lo;
         let inside = if width < NARROW_RANGE {
-            area(0.5 * (theta_lo + theta_hi)) + side * 0.5 * self.lipschitz * width
+            area(0.5 * (theta_lo + theta_hi)) + sign * 0.5 * self.lipschitz * width
         } else {
-            extreme(area(theta_lo), area(theta_hi)) + side * 0.5 * self.lipschitz * width
+            extreme(area(theta_lo), area(theta_hi)) + sign * 0.5 * self.lipschitz * width
         };
         // σ_t rounds d·n up to COS_ROUNDING past the range. Usually the area changes over that
         // sliver by less than half the relative margin AREA_ROUNDING (the Lipschitz bound times
@@ -271,7 +272,8 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         if !self.field.varies() {
             return Ok(LocalParams::default());
         }
-        let local = self.field.at(p, point)?;
+        let point = SurfacePoint { uv: self.surface.uv(p, point), ..*point };
+        let local = self.field.at(p, &point)?;
         local.validate("the medium's field")?;
         Ok(local)
     }
@@ -346,7 +348,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     #[allow(clippy::too_many_arguments)]
     fn skip_above(&self, mut t: f64, mut p: DVec3, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, DVec3, SurfacePoint)> {
         let (sigma, top) = (self.height().sigma, self.height().top());
-        let threshold = top + SKIP_SIGMAS * sigma;
+        // A surface whose clearance is the crossing itself crosses any gap in one step.
+        let exact_clearance = self.surface.exact_clearance();
+        let threshold = if exact_clearance { top } else { top + SKIP_SIGMAS * sigma };
         let mut f = start.f;
         let mut exact = true;
         for _ in 0..MAX_SKIPS {
@@ -359,6 +363,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 break;
             }
             p = origin + t * d;
+            if exact_clearance {
+                // At the crossing (rounded short of it): the shell begins here.
+                return Ok((t, p, self.checked(self.surface.start_point(p, cache), p, stats)?));
+            }
             f = self.surface.distance_bound(p).max(top);
             exact = false;
             if !(f > threshold) {
@@ -595,8 +603,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 }
                 if rng.next_f64() * mu < sigma_t {
                     // A host's normal is taken within 1e-4 of unit length; the collision's
-                    // frame is unit (found by fuzzing: length 1.00005 came back).
-                    let point = SurfacePoint { normal: point.normal.normalize(), ..point };
+                    // frame is unit (found by fuzzing: length 1.00005 came back). Its uv is
+                    // completed where the tracker's queries left it out (MeanSurface::uv).
+                    let p = seg.p + s * d;
+                    let point = SurfacePoint { normal: point.normal.normalize(), uv: self.surface.uv(p, &point), ..point };
                     return Ok(TrackedFlight::Scatter { t: seg.t + s, point, local });
                 }
             }

@@ -715,6 +715,61 @@ fn surface_points_carry_mitsuba_uv() {
     }
 }
 
+/// A sphere's tracker queries leave out the uv (its two angles cost as much as the rest); a
+/// collision still reports the uv `point` gives there, and a field still reads it.
+#[test]
+fn sphere_collisions_carry_the_uv_the_tracker_left_out() {
+    let sphere = Sphere::new(DVec3::new(0.1, -0.2, 0.3), 1.0, false, DVec3::new(0.3, 0.4, 1.0)).unwrap();
+    let m = medium(Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), 1e-3);
+    let tracker = Tracker::new(&m, &sphere);
+    let mut rng = Pcg32::new(5, 5);
+    let mut scattered = 0;
+    for i in 0..200 {
+        let n = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
+        let (o, d) = (sphere.center + 1.01 * n, -n);
+        let flight = tracker.sample_free_flight(o, d, f64::INFINITY, &mut Pcg32::new(i, 1), &mut TrackStats::default()).unwrap();
+        let TrackedFlight::Scatter { t, point, .. } = flight else { continue };
+        scattered += 1;
+        let exact = sphere.point(o + t * d).unwrap();
+        assert!((point.uv - exact.uv).length() < 1e-12 && point.uv != DVec2::ZERO, "uv {} at a collision where point() gives {}", point.uv, exact.uv);
+    }
+    assert!(scattered > 190, "{scattered} of 200 rays into the shell scattered");
+}
+
+/// A sphere's clearance is the ray's crossing of the level sphere itself: the tracker crosses
+/// the empty space above the shell in one step, even right above the top face, and a shadow ray
+/// that leaves the shell takes one segment. The step never overshoots the level (the first
+/// factor of `|v|² − R²` comes from `f`, without the cancellation of the squares).
+#[test]
+fn sphere_clearance_crosses_the_gap_above_the_shell_in_one_step() {
+    let sphere = Sphere::new(DVec3::new(0.1, -0.2, 0.3), 1.0, false, DVec3::Z).unwrap();
+    let m = medium(Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), 1e-3);
+    let (top, tracker) = (m.height.top(), Tracker::new(&m, &sphere));
+    let mut rng = Pcg32::new(8, 8);
+    for _ in 0..2000 {
+        let n = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
+        let d = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
+        // From 1e-12 to 1 above the top face, toward the sphere or away from it.
+        let p = sphere.center + (1.0 + top + 10f64.powf(-12.0 * rng.next_f64())) * n;
+        let start = sphere.point(p).unwrap();
+        let step = sphere.clearance(&start, p, d, top, &mut ());
+        assert!(step >= start.f - top, "a step of {step} below the Lipschitz step {}", start.f - top);
+        if step.is_finite() {
+            let reached = sphere.point(p + step * d).unwrap();
+            assert!(reached.f >= top - 1e-15, "from f = {} along {d}: the step {step} overshot the level to f = {}", start.f, reached.f);
+        }
+    }
+    // Shadow rays from inside the shell that leave it: one segment, then one step to the exit.
+    for i in 0..200 {
+        let n = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
+        let (a, _) = n.any_orthonormal_pair();
+        let d = (n + 0.5 * a).normalize();
+        let mut stats = TrackStats::default();
+        tracker.transmittance(sphere.center + (1.0 + m.height.sigma) * n, d, f64::INFINITY, &mut Pcg32::new(i, 2), &mut stats).unwrap();
+        assert_eq!(stats.segments, 1, "a shadow ray leaving the shell: {stats:?}");
+    }
+}
+
 /// A sphere's exact signed distance sampled on an `n³` grid over the unit cube, placed by a
 /// rotation, a uniform scale and a translation (Mitsuba's `sdfgrid` convention).
 fn sphere_grid(n: usize, radius_object: f64) -> (macrofacet::surface::GridSurface, glam::DMat3, DVec3) {
@@ -820,7 +875,7 @@ fn sdf_grids_that_are_not_distances_are_refused() {
 }
 
 /// The exact projected-area bounds of isotropic gpss, Beckmann and GGX media
-/// (`Ndf::projected_area_range`, no Lipschitz margin) hold at every tentative collision: 100,000
+/// (`Ndf::projected_area_bound`, no Lipschitz margin) hold at every tentative collision: 100,000
 /// rays per medium from random points of a sphere's shell in random directions, free flights
 /// (majorant) and transmittance (majorant and control); gpss from height field to volume-like
 /// with α_z below, equal to and above α, GGX up to α = 1 (and beyond, where the Lipschitz bound

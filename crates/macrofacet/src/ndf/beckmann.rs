@@ -3,7 +3,7 @@
 
 use super::gaussian_gradient::GaussianGradient;
 use super::gpss::Gpss;
-use super::MicrofacetDistribution;
+use super::{MicrofacetDistribution, Side};
 use crate::error::Result;
 use crate::limits::check_roughness;
 use glam::DVec3;
@@ -27,10 +27,10 @@ impl Beckmann {
         GaussianGradient::diagonal(DVec3::new(self.alpha_u, self.alpha_v, 0.0))
     }
 
-    /// [`Gpss::projected_area_range`] with `alpha_z = 0`: the Beckmann projected area is the
+    /// [`Gpss::projected_area_bound`] with `alpha_z = 0`: the Beckmann projected area is the
     /// gpss one of a height field (the same code, [`GaussianGradient`]).
-    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
-        Gpss { alpha_x: self.alpha_u, alpha_y: self.alpha_v, alpha_z: 0.0 }.projected_area_range(z)
+    pub fn projected_area_bound(&self, z: [f64; 2], side: Side) -> Option<f64> {
+        Gpss { alpha_x: self.alpha_u, alpha_y: self.alpha_v, alpha_z: 0.0 }.projected_area_bound(z, side)
     }
 }
 

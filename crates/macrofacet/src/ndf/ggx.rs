@@ -1,6 +1,6 @@
 //! The anisotropic GGX / Trowbridge–Reitz distribution, the "artist choice" of seeds/000 Sec. 4.1.
 
-use super::MicrofacetDistribution;
+use super::{MicrofacetDistribution, Side};
 use crate::error::Result;
 use crate::limits::check_roughness;
 use glam::DVec3;
@@ -23,15 +23,18 @@ impl Ggx {
         DVec3::new(self.alpha_u, self.alpha_v, 1.0)
     }
 
-    /// Upper and lower bounds of the projected area over every direction `w` with `w_z` in
+    /// The upper or lower bound of the projected area over every direction `w` with `w_z` in
     /// `[z[0], z[1]]`, for `alpha_u = alpha_v <= 1` (`None` otherwise): the area
     /// `(w_z + sqrt(α² + (1 − α²) w_z²))/2` then grows with `w_z`, so the range's ends bound it.
-    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
+    pub fn projected_area_bound(&self, z: [f64; 2], side: Side) -> Option<f64> {
         if self.alpha_u != self.alpha_v || self.alpha_u > 1.0 {
             return None;
         }
         let at = |z: f64| self.projected_area(DVec3::new(((1.0 - z) * (1.0 + z)).max(0.0).sqrt(), 0.0, z));
-        Some((at(z[1]), at(z[0])))
+        Some(match side {
+            Side::Upper => at(z[1]),
+            Side::Lower => at(z[0]),
+        })
     }
 }
 

@@ -9,7 +9,7 @@
 
 use super::beckmann::Beckmann;
 use super::gaussian_gradient::{expected_positive_part, GaussianGradient};
-use super::MicrofacetDistribution;
+use super::{MicrofacetDistribution, Side};
 use crate::error::Result;
 use crate::limits::{check_alpha_z, check_roughness};
 use crate::special::{erfc, erfcx};
@@ -41,7 +41,7 @@ impl Gpss {
         GaussianGradient::diagonal(DVec3::new(self.alpha_x, self.alpha_y, self.alpha_z))
     }
 
-    /// Upper and lower bounds of the projected area over every direction `w` with `w_z` in
+    /// The upper or lower bound of the projected area over every direction `w` with `w_z` in
     /// `[z[0], z[1]]`, for `alpha_x = alpha_y` (`None` otherwise): `E[max(0, w·g)]` grows with
     /// the mean `w_z` of `w·g` and with its spread `s(w)` (seeds/000 Eq. 32), and
     /// `s² = alpha² (1 − w_z²) + alpha_z² w_z²` is monotone in `w_z²`. So each bound is one
@@ -49,7 +49,7 @@ impl Gpss {
     /// `s²` is summed from its two non-negative terms: written `alpha_z² + (alpha² − alpha_z²)
     /// sin²`, it cancelled at grazing `w` (found by fuzzing: alpha = 3.3e-5, alpha_z = 2.7e5 gave
     /// `s = 0` at `w_z = 0`, a bound of 1.8e-15 for an area of 1.2e-5).
-    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
+    pub fn projected_area_bound(&self, z: [f64; 2], side: Side) -> Option<f64> {
         if self.alpha_x != self.alpha_y {
             return None;
         }
@@ -58,7 +58,10 @@ impl Gpss {
         let (a2, az2) = (self.alpha_x * self.alpha_x, self.alpha_z * self.alpha_z);
         let s = |z2: f64| (a2 * (1.0 - z2) + az2 * z2).sqrt();
         let (s_hi, s_lo) = if a2 >= az2 { (s(z2_min), s(z2_max)) } else { (s(z2_max), s(z2_min)) };
-        Some((expected_positive_part(z[1], s_hi), expected_positive_part(z[0], s_lo)))
+        Some(match side {
+            Side::Upper => expected_positive_part(z[1], s_hi),
+            Side::Lower => expected_positive_part(z[0], s_lo),
+        })
     }
 
     /// The height-field limit with the same in-plane roughness (used by the seeds/000 Eq. 40 mixture).

@@ -34,6 +34,23 @@ pub use normal_mixture::NormalUniformMixture;
 
 use glam::DVec3;
 
+/// Which side of a range a bound holds on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    Upper,
+    Lower,
+}
+
+impl Side {
+    /// `+1` for an upper bound, `−1` for a lower one: the direction in which a margin widens it.
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Upper => 1.0,
+            Side::Lower => -1.0,
+        }
+    }
+}
+
 /// A microfacet (or microflake) normal distribution, in literature notation.
 pub trait MicrofacetDistribution {
     /// The NDF `D(m)` (per steradian, normalised by `∫ D(m) (m·n) dm = 1`, seeds/000 Eq. 39 with `ω = n`).
@@ -246,14 +263,15 @@ impl Ndf {
         }
     }
 
-    /// Upper and lower bounds of the projected area over every direction with `w_z` in
-    /// `[z[0], z[1]]`, where a closed form makes them exact (isotropic gpss and Beckmann; GGX up
-    /// to `α = 1`); `None` otherwise.
-    pub fn projected_area_range(&self, z: [f64; 2]) -> Option<(f64, f64)> {
+    /// The upper or lower bound of the projected area over every direction with `w_z` in
+    /// `[z[0], z[1]]`, where a closed form makes it exact (isotropic gpss and Beckmann; GGX up
+    /// to `α = 1`); `None` otherwise. One evaluation: a caller needing one side (a majorant's
+    /// `S_up`) pays for that side only.
+    pub fn projected_area_bound(&self, z: [f64; 2], side: Side) -> Option<f64> {
         match self {
-            Ndf::Gpss(g) => g.projected_area_range(z),
-            Ndf::Beckmann(b) => b.projected_area_range(z),
-            Ndf::Ggx(g) => g.projected_area_range(z),
+            Ndf::Gpss(g) => g.projected_area_bound(z, side),
+            Ndf::Beckmann(b) => b.projected_area_bound(z, side),
+            Ndf::Ggx(g) => g.projected_area_bound(z, side),
             _ => None,
         }
     }

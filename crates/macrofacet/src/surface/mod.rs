@@ -197,9 +197,18 @@ pub trait MeanSurface {
     }
 
     /// The surface at a point of the segment of the last [`Self::bound`] call with this `cache`;
-    /// may use the cache to answer faster, must answer exactly as [`Self::point`].
+    /// may use the cache to answer faster, must answer exactly as [`Self::point`] (but for `uv`,
+    /// see [`Self::uv`]).
     fn point_on_segment(&self, p: DVec3, _cache: &Self::Cache) -> Result<SurfacePoint> {
         self.point(p)
+    }
+
+    /// The texture coordinates at `p`, where a query answered `point`. A surface whose `uv`
+    /// costs more than the rest of a query (a sphere's two angles) may leave it zero in
+    /// [`Self::start_point`], [`Self::point_on_segment`] and [`SegmentBound::end`] and give it
+    /// here: the tracker asks only where a field reads it. [`Self::point`] always fills it.
+    fn uv(&self, _p: DVec3, point: &SurfacePoint) -> DVec2 {
+        point.uv
     }
 
     /// Bounds along `p + s d`, `s ∈ [0, length]`, where `start = point(p)` (`d` unit). The
@@ -212,6 +221,13 @@ pub trait MeanSurface {
     /// that knows `f` along the ray may say more (up to `+∞`: never below `level`).
     fn clearance(&self, start: &SurfacePoint, _p: DVec3, _d: DVec3, level: f64, _cache: &mut Self::Cache) -> f64 {
         (start.f - level) / self.lipschitz()
+    }
+
+    /// True when [`Self::clearance`] is the ray's first crossing of `level` (up to rounding),
+    /// not a step within a neighbourhood: one step then crosses any empty space above the shell,
+    /// and the tracker takes it even right above the top face.
+    fn exact_clearance(&self) -> bool {
+        false
     }
 
     /// A Lipschitz constant of `f` over all space: 1 for a signed distance; an interpolated

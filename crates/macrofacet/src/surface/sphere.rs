@@ -29,6 +29,20 @@ impl Sphere {
         Ok(Sphere { center, radius, flip_normals, pole })
     }
 
+    /// [`MeanSurface::point`] but for `uv` (zero): the tracker's queries, where the two angles
+    /// of the uv would cost as much as the rest ([`MeanSurface::uv`]).
+    fn point_without_uv(&self, p: DVec3) -> SurfacePoint {
+        let v = p - self.center;
+        // Without overflow: |v|² overflows from 1.3e154 on (found by fuzzing: a flipped sphere
+        // answered f = −inf 1.4e284 from its centre).
+        let r = robust_length(v);
+        // At the centre every direction is a gradient; any unit vector keeps the frame valid.
+        // Rescaled first: |v|² of a v shorter than 1e-154 loses its precision to underflow (a
+        // point 4e-163 from the centre had a normal of length 0.9999955, found by fuzzing).
+        let outward = rescaled(v).try_normalize().unwrap_or(self.pole);
+        SurfacePoint { f: self.sign() * (r - self.radius), normal: self.sign() * outward, tangent: self.pole.cross(v), uv: DVec2::ZERO }
+    }
+
     fn sign(&self) -> f64 {
         if self.flip_normals {
             -1.0
@@ -42,25 +56,31 @@ impl MeanSurface for Sphere {
     type Cache = ();
 
     fn point(&self, p: DVec3) -> Result<SurfacePoint> {
+        let point = self.point_without_uv(p);
+        Ok(SurfacePoint { uv: self.uv(p, &point), ..point })
+    }
+
+    fn start_point(&self, p: DVec3, _: &mut ()) -> Result<SurfacePoint> {
+        Ok(self.point_without_uv(p))
+    }
+
+    fn point_on_segment(&self, p: DVec3, _: &()) -> Result<SurfacePoint> {
+        Ok(self.point_without_uv(p))
+    }
+
+    /// Mitsuba's sphere uv (azimuth / 2π, polar angle / π) about the pole, the azimuth measured
+    /// from the first vector of the pole's Duff et al. basis.
+    fn uv(&self, p: DVec3, _: &SurfacePoint) -> DVec2 {
         let v = p - self.center;
-        // Without overflow: |v|² overflows from 1.3e154 on (found by fuzzing: a flipped sphere
-        // answered f = −inf 1.4e284 from its centre).
-        let r = robust_length(v);
-        // At the centre every direction is a gradient; any unit vector keeps the frame valid.
-        // Rescaled first: |v|² of a v shorter than 1e-154 loses its precision to underflow (a
-        // point 4e-163 from the centre had a normal of length 0.9999955, found by fuzzing).
-        let outward = rescaled(v).try_normalize().unwrap_or(self.pole);
-        // Mitsuba's sphere uv (azimuth / 2π, polar angle / π) about the pole, the azimuth measured
-        // from the first vector of the pole's Duff et al. basis.
         let (x_axis, y_axis) = self.pole.any_orthonormal_pair();
         let azimuth = v.dot(y_axis).atan2(v.dot(x_axis));
         let u = if azimuth < 0.0 { azimuth / TAU + 1.0 } else { azimuth / TAU };
-        let uv = DVec2::new(u, outward.dot(self.pole).clamp(-1.0, 1.0).acos() / PI);
-        Ok(SurfacePoint { f: self.sign() * (r - self.radius), normal: self.sign() * outward, tangent: self.pole.cross(v), uv })
+        let outward = rescaled(v).try_normalize().unwrap_or(self.pole);
+        DVec2::new(u, outward.dot(self.pole).clamp(-1.0, 1.0).acos() / PI)
     }
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {
-        let end = self.point(p + length * d)?;
+        let end = self.point_without_uv(p + length * d);
         let curvature = if self.flip_normals { Curvature::Concave } else { Curvature::Convex };
         let mut bound = convex_bound(start, &end, d, length, curvature);
         // The normal (q − c)/|q − c| at a point q of the segment is rounded with q's coordinates,
@@ -88,7 +108,8 @@ impl MeanSurface for Sphere {
     }
 
     /// The distance to the level sphere `|p − c| = r ± level`, shortened by the rounding of
-    /// the root.
+    /// the root: exact, so the tracker skips with it right above the shell
+    /// ([`MeanSurface::exact_clearance`]).
     fn clearance(&self, start: &SurfacePoint, p: DVec3, d: DVec3, level: f64, _: &mut ()) -> f64 {
         let lipschitz = start.f - level;
         let v = p - self.center;
@@ -98,7 +119,10 @@ impl MeanSurface for Sphere {
             return lipschitz;
         }
         let b = v.dot(d);
-        let discriminant = b * b - (v.length_squared() - radius * radius);
+        // |v|² − radius² as (|v| − radius)(|v| + radius), its first factor ±(f − level): without
+        // the cancellation of the difference of squares right above the level.
+        let c = self.sign() * lipschitz * (self.radius + self.sign() * start.f + radius);
+        let discriminant = b * b - c;
         let exact = if self.flip_normals {
             // Inside the level sphere: the exit.
             -b + discriminant.max(0.0).sqrt()
@@ -106,9 +130,13 @@ impl MeanSurface for Sphere {
             f64::INFINITY // the ray misses the level sphere or moves away from it
         } else {
             // The nearer root, written without cancellation.
-            (v.length_squared() - radius * radius) / (-b + discriminant.sqrt())
+            c / (-b + discriminant.sqrt())
         };
         (exact * (1.0 - 1e-9)).max(lipschitz)
+    }
+
+    fn exact_clearance(&self) -> bool {
+        true
     }
 
     fn distance_bound(&self, p: DVec3) -> f64 {

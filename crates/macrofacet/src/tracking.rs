@@ -464,9 +464,14 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 length = 0.5 * bound.length;
                 continue;
             }
+            // (Borrowed: the bounds hold two Ndf values, hundreds of bytes.)
+            let fielded;
             let area = match params.alpha {
-                Some([_, hi]) => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi)),
-                None => self.area,
+                Some([_, hi]) => {
+                    fielded = ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi));
+                    &fielded
+                }
+                None => &self.area,
             };
             let s_up = area.upper(bound.cos) * factor;
             // A wide range of d·n (a segment through a sphere's centre, where d·n turns from −1

@@ -178,6 +178,27 @@ fn tiny_offsets_and_tiny_meshes() {
     assert!(message.contains("smallest length"), "{message}");
 }
 
+/// `fuzz/artifacts/tracking/crash-7eeb41be00481e1a538e452f8520de7af17fa2b5`: an octahedron of
+/// half-width 1.7e-161 (one vertex moved out to (0, 6.47, 6.47), one duplicated): its face
+/// normals came from cross products of edges whose product is subnormal, and
+/// `mf_surface_eval` at (8.9e-161, 8.9e-161, 8.9e-161) answered MF_OK with a normal of length
+/// 1.0000705. Every normal must be unit to rounding, here and over a sweep of tiny scales.
+#[test]
+fn tiny_mesh_has_unit_face_normals() {
+    // The artifact's mesh at scale `s`: five vertices within `s` of the origin, one at 6.47.
+    let mesh = |s: f64| [-s, 0.0, 0.0, -s, 0.0, 0.0, 0.0, s, 0.0, 0.0, -s, 0.0, 0.0, 6.470588235294117, 6.470588235294117, 0.0, 0.0, -s];
+    let (_, indices) = octahedron(1.0);
+    for s in [1.724222298951975e-161, 1e-150, 3e-155, 1e-200, 1e-250, 1e-300] {
+        let surface = accepted_mesh(&mesh(s), &indices, None);
+        for q in [[5.176470588235293, 5.176470588235293, 5.176470588235293], [0.3, 0.2, 0.1], [0.01, -0.5, -0.9], [2.0, -1.0, 0.5]] {
+            let (status, point) = eval(surface, mf_vec3 { x: q[0] * s, y: q[1] * s, z: q[2] * s });
+            assert_eq!(status, mf_status::MF_OK, "{}", last_error());
+            assert!((length(point.normal) - 1.0).abs() <= 1e-12, "scale {s:e} at {q:?}: {point:?}");
+        }
+        unsafe { mf_surface_free(surface) };
+    }
+}
+
 /// `fuzz/artifacts/tracking/crash-f608ee00e91797708ef8fd1375c9fa83fb734e0d`: far from a
 /// surface, where `|p − closest|²` overflows (|p| ~ 1e304; the tetrahedron of that artifact had
 /// half-width 5.4e51), `mf_surface_eval` answers MF_OK with the normal (0, 0, 0) (`f = +inf` is
@@ -1105,3 +1126,39 @@ fn sphere_larger_than_its_rounding_keeps_its_majorant() {
         mf_medium_free(m);
     }
 }
+
+/// `fuzz/artifacts/fields/crash-dc8af182326d0269e641f8aae04205c4680198b5`: gpss α = 1e-6, σ =
+/// 1e50, a flipped sphere of radius `f64::MAX` around the origin, a ray from (−1e300, −1e300,
+/// −1e300) with `t_max = +inf`. The sphere's clearance (its Lipschitz step, `|v|²` overflowing)
+/// took the ray to t = 1.8e308, and the segment across the shell ran past `f64::MAX`: a
+/// tentative collision where `|q| > f64::MAX` had `f = −inf`, broke the majorant, and came back
+/// as MF_OK at `t = +inf`, `p = (−inf, inf, inf)`. No ray point beyond f64's range is formed
+/// now, and the interval ends at `t = f64::MAX`: a collision, if any, is finite and within the
+/// majorant, or the call fails with a message.
+#[test]
+fn ray_beyond_the_range_of_f64_is_never_a_collision() {
+    let m = medium(&[("sigma", 1e50), ("alpha", 1e-6)], &[("distribution", "gpss"), ("material", "Cr")]);
+    let mut sphere = ptr::null_mut();
+    let pole = mf_vec3 { x: -1e300, y: -1e300, z: -1e300 };
+    assert_eq!(unsafe { mf_surface_new_sphere(mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, f64::MAX, true, pole, &mut sphere) }, mf_status::MF_OK);
+    let origin = mf_vec3 { x: -1e300, y: -1e300, z: -1e300 };
+    let d = mf_vec3 { x: -0.364599518083765, y: 0.8533899574065312, z: 0.37254901960784315 };
+    for seed in 0..20 {
+        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed };
+        let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
+        let status = unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
+        if status != mf_status::MF_OK {
+            assert!(!last_error().is_empty());
+            continue;
+        }
+        let c = unsafe { c.assume_init() };
+        assert_eq!(c.stats.majorant_violations, 0, "{c:?}");
+        assert!(!c.scattered || (c.t.is_finite() && c.p.x.is_finite() && c.p.y.is_finite() && c.p.z.is_finite()), "{c:?}");
+    }
+    assert_eq!(violations_of_calls(m, sphere, origin, d, f64::INFINITY, 0..20, true), (0, 0));
+    unsafe {
+        mf_surface_free(sphere);
+        mf_medium_free(m);
+    }
+}
+

@@ -317,9 +317,12 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     /// The interval of the ray inside the region's bounding box (the surface's box grown by the
     /// shell's top), clipped to `[0, t_max]`.
+    /// No representable ray point lies beyond `t = f64::MAX`: the interval ends there (found by
+    /// fuzzing: a segment across the shell of a sphere of radius `f64::MAX` ended past it, and
+    /// a collision came back at `t = +inf`).
     fn clip(&self, origin: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
         let region = self.surface.bounding_box().grown(self.height().top() * (1.0 + 1e-9));
-        region.clip(origin, d, 0.0, t_max)
+        region.clip(origin, d, 0.0, t_max.min(f64::MAX))
     }
 
     /// The length to ask the surface for: enough for `f` to change by [`SEGMENT_SIGMAS`] σ below
@@ -362,7 +365,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             if !(t < t_exit) {
                 break;
             }
-            p = origin + t * d;
+            p = ray_point(origin, t, d)?;
             if exact_clearance {
                 // At the crossing (rounded short of it): the shell begins here.
                 return Ok((t, p, self.checked(self.surface.start_point(p, cache), p, stats)?));
@@ -500,7 +503,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// `σ_t`, the surface point and the local parameters at the tentative collision `s` of
     /// `seg`, counted in `stats`.
     fn at_tentative(&self, seg: &Segment, s: f64, d: DVec3, cache: &S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint, LocalParams)> {
-        let p = seg.p + s * d;
+        let p = ray_point(seg.p, s, d)?;
         let point = self.checked(self.surface.point_on_segment(p, cache), p, stats)?;
         let (sigma_t, local) = self.sigma_t_at(p, &point, d)?;
         stats.tentative_collisions += 1;
@@ -567,7 +570,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             ));
         }
         // The point the surface computed the end at (`next_segment`).
-        let p = seg.p + seg.bound.length * d;
+        let p = ray_point(seg.p, seg.bound.length, d)?;
         let start = match seg.bound.end {
             // Validated with its bound (`next_segment`); counted as the query it saves.
             Some(end) => {
@@ -585,7 +588,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(TrackedFlight::Pass) };
         let mut cache = S::Cache::default();
         let mut t = t_enter;
-        let mut p = origin + t * d;
+        let mut p = ray_point(origin, t, d)?;
         let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;
         let mut previous = Previous::None;
         let mut budget = 0u64;
@@ -627,7 +630,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(1.0) };
         let mut cache = S::Cache::default();
         let mut t = t_enter;
-        let mut p = origin + t * d;
+        let mut p = ray_point(origin, t, d)?;
         let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;
         let mut transmittance = 1.0;
         let mut previous = Previous::None;
@@ -680,6 +683,17 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         }
         Err(too_many_segments())
     }
+}
+
+/// The point `p + s d` of a ray, refused where it leaves f64's range: no surface query, and no
+/// collision, can be represented there (found by fuzzing: a tentative collision beyond a sphere
+/// of radius `f64::MAX` had `f = −inf`, broke the majorant and came back at infinity).
+fn ray_point(p: DVec3, s: f64, d: DVec3) -> Result<DVec3> {
+    let q = p + s * d;
+    if !q.is_finite() {
+        return Err(Error::new(ErrorKind::InvalidArgument, format!("the ray from {p} along {d} leaves the range of f64 at {s:e} from there: no point beyond can be represented")));
+    }
+    Ok(q)
 }
 
 /// Russian roulette on a transmittance estimate below [`ROULETTE_THRESHOLD`]: survives with

@@ -132,9 +132,12 @@ impl TriangleMesh {
             .collect();
         let corners = |tri: &[u32; 3]| tri.map(|v| welded[v as usize]);
 
+        // The edges rescaled before their cross product, and it before normalising: edges of
+        // 1.7e-161 have a subnormal cross product, whose normal came out of length 1.00007
+        // (found by fuzzing).
         let face_normal = |tri: &[u32; 3]| {
             let [a, b, c] = tri.map(|v| positions[v as usize]);
-            (b - a).cross(c - a).try_normalize().unwrap_or(DVec3::ZERO)
+            rescaled(rescaled(b - a).cross(rescaled(c - a))).try_normalize().unwrap_or(DVec3::ZERO)
         };
         let mut vertex_pn = vec![DVec3::ZERO; weld.len()];
         let mut edge_pn: HashMap<(u32, u32), DVec3> = HashMap::new();
@@ -210,7 +213,7 @@ impl TriangleMesh {
                     let (u, v) = (w[i], w[(i + 1) % 3]);
                     pn(edge_pn.get(&(u.min(v), u.max(v))).copied().unwrap_or(DVec3::ZERO))
                 };
-                let shading = normals.map(|ns| tri.map(|v| ns[v as usize].normalize()));
+                let shading = normals.map(|ns| tri.map(|v| rescaled(ns[v as usize]).normalize()));
                 let shading_min_length = shading.map_or(0.0, |ns| {
                     // |Σ b_i n_i| >= (Σ b_i n_i)·u >= min_i n_i·u for the unit mean direction u.
                     let u = (ns[0] + ns[1] + ns[2]).try_normalize().unwrap_or(DVec3::ZERO);

@@ -21,6 +21,7 @@
 
 use super::bvh::Bvh;
 use super::triangle::Triangle;
+use crate::frame::rescaled;
 use glam::DVec3;
 
 /// Margins from the edges, as fractions of the inradius: a larger margin keeps segments away
@@ -77,7 +78,8 @@ impl FaceRegion {
         if !(inradius > 0.0) {
             return FaceRegion::NONE;
         }
-        let inward = [0, 1, 2].map(|k| n.cross(edge(k)).normalize());
+        // Rescaled before normalising, as the face normal (a tiny mesh's are subnormal).
+        let inward = [0, 1, 2].map(|k| rescaled(n.cross(edge(k))).normalize());
         let offset = [0, 1, 2].map(|k| -inward[k].dot(t.p[k]));
         // The incentre, and the corners of the inset at margin m: the triangle scaled about it.
         let incentre = (lengths[1] * t.p[0] + lengths[2] * t.p[1] + lengths[0] * t.p[2]) / perimeter;

@@ -192,15 +192,9 @@ pub fn normal_cdf(x: f64) -> f64 {
     }
 }
 
-/// Above this `x`, [`ln_normal_cdf`] takes the logarithm of `Φ(x)` itself (`Φ(−30) ≈ 5e-198`,
-/// far from underflow); the rounding of `x/√2` then costs `≈ x² ε` absolute, as `−x²/2` does
-/// below.
-const LN_CDF_DIRECT: f64 = -30.0;
-
 /// `ln Φ(x)`, all `x`; relative error measured ≲ 1e-15.
 ///
-/// - `−30 ≤ x < 0`: `ln(erfc(−x/√2)/2)`.
-/// - `x < −30`: `−x²/2 + ln(erfcx(−x/√2)/2)` — both terms negative, no cancellation, no underflow;
+/// - `x < 0`: `−x²/2 + ln(erfcx(−x/√2)/2)` — both terms negative, no cancellation, no underflow;
 ///   behaves like `−x²/2 − ln(−x) − ln√(2π)` as `x → −∞`. Returns `−∞` only when `x²/2`
 ///   itself overflows (`x < −1.34e154`; the true value is then below `−f64::MAX`) or at `x = −∞`.
 /// - `x ≥ 0`: `log1p(−Φ(−x))`, relatively accurate while `Φ(−x)` is a normal number
@@ -211,11 +205,6 @@ pub fn ln_normal_cdf(x: f64) -> f64 {
         return f64::NAN;
     }
     if x < 0.0 {
-        if x >= LN_CDF_DIRECT {
-            // Φ(x) = erfc(−x/√2)/2 is a normal number here: its logarithm directly, without the
-            // e^{x²/2} that erfcx multiplies in and −x²/2 takes out again (one exponential less).
-            return (0.5 * erfc(-x * FRAC_1_SQRT_2)).ln();
-        }
         if x == f64::NEG_INFINITY {
             return f64::NEG_INFINITY;
         }

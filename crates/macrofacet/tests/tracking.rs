@@ -250,6 +250,29 @@ fn sphere_of_radius_ten_sigma() {
     assert_eq!(failures, 0);
 }
 
+/// A spherical cavity (flipped normals: the opaque interior lies outside the sphere, the shell
+/// lines its wall from inside) of radius 10σ: rays from the cavity reach the shell's top in one
+/// exact step of the sphere's clearance (the exit of the level sphere), then track a concave
+/// shell. Free flights and transmittance against the exact ones, no majorant violation.
+#[test]
+fn spherical_cavity_of_radius_ten_sigma() {
+    let (r, sigma) = (1.0, 0.1);
+    let c = DVec3::new(0.1, -0.2, 0.3);
+    let cavity = Sphere::new(c, r, true, DVec3::new(0.3, 0.4, 1.0)).unwrap();
+    let top = r - 3.0 * sigma; // the radius of the shell's top face
+    // Each ray ends in the cavity or the shell, so that transmittance is not trivially 0.
+    let cases = vec![
+        ray("to_the_wall", c, c + DVec3::X, r - sigma),
+        ray("oblique", c + DVec3::new(-0.5 * top, 0.3 * top, 0.0), c + DVec3::new(r, 0.5 * r, 0.1 * r), 1.2 * r),
+        ray("grazing_top", c + DVec3::new(-0.5 * r, 0.0, top - 0.3 * sigma), c + DVec3::new(0.0, 0.0, top - 0.3 * sigma), r),
+        ray("leaving_the_wall", c + DVec3::new(0.0, 0.0, r - 0.5 * sigma), c + DVec3::new(0.3, 0.0, 0.0), r),
+    ];
+    let m = medium(Ndf::Gpss(Gpss::new(1.0, 1.0, 1.0).unwrap()), sigma);
+    let (failures, stats) = check_surface("cavity_gpss_iso", &m, &cavity, &cases, 3000, sidak_alpha(0.01, 3 * cases.len()), 21);
+    assert_eq!(stats.majorant_violations, 0, "majorant violated");
+    assert_eq!(failures, 0);
+}
+
 #[test]
 fn meshes_with_sharp_and_reflex_edges_and_a_smooth_torus() {
     let gpss = |sigma| medium(Ndf::Gpss(Gpss::new(0.5, 0.3, 0.25).unwrap()), sigma);

@@ -316,10 +316,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     }
 
     /// The interval of the ray inside the region's bounding box (the surface's box grown by the
-    /// shell's top), clipped to `[0, t_max]`.
-    /// No representable ray point lies beyond `t = f64::MAX`: the interval ends there (found by
-    /// fuzzing: a segment across the shell of a sphere of radius `f64::MAX` ended past it, and
-    /// a collision came back at `t = +inf`).
+    /// shell's top), clipped to `[0, t_max]`. No representable ray point lies beyond
+    /// `t = f64::MAX`: the interval ends there (found by fuzzing: a segment across the shell of
+    /// a sphere of radius `f64::MAX` ended past it, and a collision came back at `t = +inf`).
     fn clip(&self, origin: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
         let region = self.surface.bounding_box().grown(self.height().top() * (1.0 + 1e-9));
         region.clip(origin, d, 0.0, t_max.min(f64::MAX))

@@ -1162,3 +1162,31 @@ fn ray_beyond_the_range_of_f64_is_never_a_collision() {
     }
 }
 
+/// `fuzz/artifacts/tracking/crash-5cddce980e0f25528ea6851296e31a372884d0c3`: gpss α = 1e-6,
+/// σ = 1e50, shell_extent 1e-3; a flipped sphere of radius `f64::MAX` around (−8.6e307,
+/// −1.3e308, 3.7e307). A tentative collision on its shell, 1.65e308 along the ray, was
+/// 1.797e308 from the centre: `|p − c|` rounded past `f64::MAX` to +inf, so f = −inf there
+/// (the point lies on the shell), σ_t = inf broke the majorant, and the call answered MF_OK. The
+/// sphere halves `p − c` where its length would overflow; f is then as representable as the
+/// distance to the sphere.
+#[test]
+fn sphere_distance_near_f64_max_does_not_overflow() {
+    let m = medium(&[("sigma", 1e50), ("shell_extent", 9.99999999999e-4), ("alpha", 1e-6)], &[("distribution", "gpss")]);
+    let mut sphere = ptr::null_mut();
+    let center = mf_vec3 { x: -8.564975663440448e307, y: -1.2576352121682895e308, z: 3.742620939433999e307 };
+    let pole = mf_vec3 { x: 1.9383857733866474e-5, y: 6.900967161966396e-7, z: 0.9999999998118949 };
+    assert_eq!(unsafe { mf_surface_new_sphere(center, f64::MAX, true, pole, &mut sphere) }, mf_status::MF_OK);
+    // The tentative collision of the artifact: on the shell, to f64's rounding there (~1e292).
+    let (status, point) = eval(sphere, mf_vec3 { x: -1.3858895369324425e308, y: 3.058422007288973e307, z: 1.0862895709187997e308 });
+    assert_eq!(status, mf_status::MF_OK);
+    assert!(point.f.is_finite() && point.f.abs() < 1e300, "{point:?}");
+    let origin = mf_vec3 { x: -8.991263542916249e307, y: -1.1317516564109677e308, z: 4.315917196292113e307 };
+    let d = mf_vec3 { x: -0.29448148859893886, y: 0.8697140501762715, z: 0.39607843137254917 };
+    let counts = violations_of_calls(m, sphere, origin, d, f64::INFINITY, (0..10).chain([5570193308531903821]), true);
+    assert_eq!(counts, (0, 0), "majorant violations in free flights and transmittance");
+    unsafe {
+        mf_surface_free(sphere);
+        mf_medium_free(m);
+    }
+}
+

@@ -32,15 +32,30 @@ impl Sphere {
     /// [`MeanSurface::point`] but for `uv` (zero): the tracker's queries, where the two angles
     /// of the uv would cost as much as the rest ([`MeanSurface::uv`]).
     fn point_without_uv(&self, p: DVec3) -> SurfacePoint {
-        let v = p - self.center;
-        // Without overflow: |v|² overflows from 1.3e154 on (found by fuzzing: a flipped sphere
-        // answered f = −inf 1.4e284 from its centre).
-        let r = robust_length(v);
+        let (v, scale, length) = self.offset(p);
         // At the centre every direction is a gradient; any unit vector keeps the frame valid.
         // Rescaled first: |v|² of a v shorter than 1e-154 loses its precision to underflow (a
         // point 4e-163 from the centre had a normal of length 0.9999955, found by fuzzing).
         let outward = rescaled(v).try_normalize().unwrap_or(self.pole);
-        SurfacePoint { f: self.sign() * (r - self.radius), normal: self.sign() * outward, tangent: self.pole.cross(v), uv: DVec2::ZERO }
+        let distance = if scale == 1.0 { length - self.radius } else { scale * (length - self.radius / scale) };
+        let f = self.sign() * distance;
+        SurfacePoint { f, normal: self.sign() * outward, tangent: self.pole.cross(v), uv: DVec2::ZERO }
+    }
+
+    /// `p − c` as `scale × v` (`scale` 1, or 2 where `p − c` or its length would overflow) with
+    /// `|v|`, without overflow: `|p − c|²` overflows from 1.3e154 on (found by fuzzing: a flipped
+    /// sphere answered f = −inf 1.4e284 from its centre), and `|p − c|` itself near `f64::MAX`,
+    /// where `|p − c| − r` may still be small (found by fuzzing: a point on the shell of a sphere
+    /// of radius `f64::MAX` had f = −inf and broke the majorant). So `f` is `scale (|v| − r /
+    /// scale)`, infinite only where the distance to the sphere is.
+    fn offset(&self, p: DVec3) -> (DVec3, f64, f64) {
+        let v = p - self.center;
+        let length = robust_length(v);
+        if length.is_finite() {
+            return (v, 1.0, length);
+        }
+        let half = 0.5 * p - 0.5 * self.center;
+        (half, 2.0, robust_length(half))
     }
 
     fn sign(&self) -> f64 {
@@ -71,7 +86,7 @@ impl MeanSurface for Sphere {
     /// Mitsuba's sphere uv (azimuth / 2π, polar angle / π) about the pole, the azimuth measured
     /// from the first vector of the pole's Duff et al. basis.
     fn uv(&self, p: DVec3, _: &SurfacePoint) -> DVec2 {
-        let v = p - self.center;
+        let (v, _, _) = self.offset(p);
         let (x_axis, y_axis) = self.pole.any_orthonormal_pair();
         let azimuth = v.dot(y_axis).atan2(v.dot(x_axis));
         let u = if azimuth < 0.0 { azimuth / TAU + 1.0 } else { azimuth / TAU };
@@ -89,8 +104,8 @@ impl MeanSurface for Sphere {
         // ray was rounded by 1.5e284, its normal 60° off the segment's d·n range, and the
         // majorant broken). The range widens by that at the segment's closest approach to the
         // centre (as the mesh's does at a piece's smallest distance).
-        let v = p - self.center;
-        let closest = robust_length(v + (-v.dot(d)).clamp(0.0, length) * d);
+        let (v, scale, _) = self.offset(p);
+        let closest = scale * robust_length(v + (-v.dot(d)).clamp(0.0, length / scale) * d);
         let coordinates = p.abs().max((p + length * d).abs()).max(self.center.abs()).max_element();
         let rounding = 4.0 * f64::EPSILON * coordinates / closest;
         if rounding > 0.0 {
@@ -140,7 +155,7 @@ impl MeanSurface for Sphere {
     }
 
     fn distance_bound(&self, p: DVec3) -> f64 {
-        (robust_length(p - self.center) - self.radius).abs()
+        self.point_without_uv(p).f.abs()
     }
 
     fn bounding_box(&self) -> Aabb {

@@ -32,14 +32,19 @@ impl Sphere {
     /// [`MeanSurface::point`] but for `uv` (zero): the tracker's queries, where the two angles
     /// of the uv would cost as much as the rest ([`MeanSurface::uv`]).
     fn point_without_uv(&self, p: DVec3) -> SurfacePoint {
-        let (v, scale, length) = self.offset(p);
+        let (v, distance) = self.distance(p);
         // At the centre every direction is a gradient; any unit vector keeps the frame valid.
         // Rescaled first: |v|² of a v shorter than 1e-154 loses its precision to underflow (a
         // point 4e-163 from the centre had a normal of length 0.9999955, found by fuzzing).
         let outward = rescaled(v).try_normalize().unwrap_or(self.pole);
+        SurfacePoint { f: self.sign() * distance, normal: self.sign() * outward, tangent: self.pole.cross(v), uv: DVec2::ZERO }
+    }
+
+    /// `|p − c| − r` with the offset it came from ([`Self::offset`]).
+    fn distance(&self, p: DVec3) -> (DVec3, f64) {
+        let (v, scale, length) = self.offset(p);
         let distance = if scale == 1.0 { length - self.radius } else { scale * (length - self.radius / scale) };
-        let f = self.sign() * distance;
-        SurfacePoint { f, normal: self.sign() * outward, tangent: self.pole.cross(v), uv: DVec2::ZERO }
+        (v, distance)
     }
 
     /// `p − c` as `scale × v` (`scale` 1, or 2 where `p − c` or its length would overflow) with
@@ -155,7 +160,7 @@ impl MeanSurface for Sphere {
     }
 
     fn distance_bound(&self, p: DVec3) -> f64 {
-        self.point_without_uv(p).f.abs()
+        self.distance(p).1.abs()
     }
 
     fn bounding_box(&self) -> Aabb {

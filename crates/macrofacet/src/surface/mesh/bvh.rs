@@ -2,7 +2,7 @@
 //! median splits of the centroids along the longest axis, leaves of up to four triangles,
 //! children stored in pairs.
 
-use super::triangle::{closer, closest_on_triangle, Closest, Triangle};
+use super::triangle::{closer, closest_on_triangle, may_be_within, Closest, Triangle};
 use glam::DVec3;
 
 /// Triangles per leaf.
@@ -24,14 +24,14 @@ pub(super) struct Bvh {
 }
 
 impl Bvh {
-    /// Builds the hierarchy and reorders `triangles` into leaf order.
-    pub fn build(triangles: &mut Vec<Triangle>) -> Bvh {
+    /// Builds the hierarchy over `triangles`; with it, their leaf order (the hierarchy's leaves
+    /// refer to the triangles in that order).
+    pub fn build(triangles: &[Triangle]) -> (Bvh, Vec<u32>) {
         let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
         let mut nodes = vec![Node { min: DVec3::ZERO, max: DVec3::ZERO, first: 0, count: 0 }];
         let centroids: Vec<DVec3> = triangles.iter().map(|t| (t.p[0] + t.p[1] + t.p[2]) / 3.0).collect();
         fill(&mut nodes, triangles, &centroids, &mut order, 0, 0, triangles.len());
-        *triangles = order.iter().map(|&i| triangles[i as usize].clone()).collect();
-        Bvh { nodes }
+        (Bvh { nodes }, order)
     }
 
     /// The bounds of every triangle.
@@ -53,6 +53,9 @@ impl Bvh {
             }
             if node.count > 0 {
                 for i in node.first..node.first + node.count {
+                    if !may_be_within(&triangles[i as usize], p, best.distance_sq) {
+                        continue;
+                    }
                     let c = closest_on_triangle(&triangles[i as usize], p, i);
                     if closer(&c, &best) {
                         best = c;

@@ -29,7 +29,7 @@ use region::FaceRegion;
 use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, Tangent};
 use smallvec::SmallVec;
 use std::collections::HashMap;
-use triangle::{closer, closest_among, closest_on_triangle, Closest, Feature, Triangle};
+use triangle::{closer, closest_among, closest_on_triangle, Attributes, Closest, Feature, Triangle};
 use crate::frame::rescaled;
 
 /// Per-candidate values of a segment bound, on the stack.
@@ -41,9 +41,6 @@ const MAX_CANDIDATES: usize = 16;
 /// The bounds are padded by this many `epsilon` (rounding, and an undetermined sign right at
 /// the start of a segment).
 const PAD: f64 = 8.0;
-/// A certified piece shorter than this fraction of the segment asked for is worth a query for
-/// the closest triangle, whose region may reach farther.
-const SHORT_PIECE: f64 = 0.25;
 /// Certified pieces shorter than this fraction of the segment are left to the general bound.
 const MIN_PIECE: f64 = 1e-3;
 /// The grid's cells, in mean edge lengths.
@@ -52,8 +49,9 @@ const CELL_EDGES: f64 = 0.5;
 /// A closed triangle mesh in world space; see the module documentation.
 #[derive(Clone, Debug)]
 pub struct TriangleMesh {
-    /// In the hierarchy's leaf order.
+    /// In the hierarchy's leaf order, as are their attributes.
     triangles: Vec<Triangle>,
+    attributes: Vec<Attributes>,
     bvh: Bvh,
     grid: CellGrid,
     /// Per triangle, where it is certainly the closest.
@@ -200,7 +198,7 @@ impl TriangleMesh {
             return Err(invalid(format!("the mesh is inside out: its triangles wind clockwise seen from outside (signed volume {:e}); reverse each triangle's winding", volume * extent.powi(3))));
         }
 
-        let mut triangles: Vec<Triangle> = indices
+        let (triangles, attributes): (Vec<Triangle>, Vec<Attributes>) = indices
             .iter()
             .map(|tri| {
                 let p = tri.map(|v| positions[v as usize]);
@@ -219,9 +217,9 @@ impl TriangleMesh {
                     let u = (ns[0] + ns[1] + ns[2]).try_normalize().unwrap_or(DVec3::ZERO);
                     ns.iter().map(|n| n.dot(u)).fold(f64::INFINITY, f64::min).max(0.0)
                 });
-                Triangle {
-                    p,
-                    n,
+                let centre = (p[0] + p[1] + p[2]) / 3.0;
+                let geometry = Triangle { p, n, centre, radius: p.iter().map(|v| (*v - centre).length()).fold(0.0, f64::max) };
+                let attributes = Attributes {
                     edge_pn: [edge(0), edge(1), edge(2)],
                     vertex_pn: w.map(|v| pn(vertex_pn[v as usize])),
                     shading,
@@ -239,24 +237,25 @@ impl TriangleMesh {
                     }),
                     dpdu: dpdu(&p, n, uvs.map(|uv| tri.map(|v| uv[v as usize]))),
                     uv: uvs.map(|uv| tri.map(|v| uv[v as usize])),
-                    centre: (p[0] + p[1] + p[2]) / 3.0,
-                    radius: p.iter().map(|v| (*v - (p[0] + p[1] + p[2]) / 3.0).length()).fold(0.0, f64::max),
-                }
+                };
+                (geometry, attributes)
             })
-            .collect();
+            .unzip();
 
         let mean_edge = indices
             .iter()
             .map(|t| (positions[t[1] as usize] - positions[t[0] as usize]).length() + (positions[t[2] as usize] - positions[t[1] as usize]).length() + (positions[t[0] as usize] - positions[t[2] as usize]).length())
             .sum::<f64>()
             / (3 * indices.len()) as f64;
-        let bvh = Bvh::build(&mut triangles);
+        let (bvh, order) = Bvh::build(&triangles);
+        let triangles: Vec<Triangle> = order.iter().map(|&i| triangles[i as usize].clone()).collect();
+        let attributes: Vec<Attributes> = order.iter().map(|&i| attributes[i as usize].clone()).collect();
         let (min, max) = bvh.bounds();
         let grid = CellGrid::build(&bvh, &triangles, min, max, CELL_EDGES * mean_edge);
         let bounds = Aabb { min, max };
         let epsilon = 1e-13 * (bounds.max - bounds.min).max_element().max(bounds.max.abs().max(bounds.min.abs()).max_element()).max(1e-300);
         let regions = FaceRegion::build(&bvh, &triangles, epsilon);
-        Ok(TriangleMesh { triangles, bvh, grid, regions, bounds, epsilon })
+        Ok(TriangleMesh { triangles, attributes, bvh, grid, regions, bounds, epsilon })
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -330,9 +329,9 @@ impl TriangleMesh {
 
     /// The surface point of a closest-point result.
     fn surface_point(&self, p: DVec3, c: &Closest) -> SurfacePoint {
-        let tri = &self.triangles[c.triangle as usize];
+        let tri = &self.attributes[c.triangle as usize];
         let pseudo = match c.feature {
-            Feature::Face => tri.n,
+            Feature::Face => self.triangles[c.triangle as usize].n,
             Feature::Edge(i) => tri.edge_pn[i],
             Feature::Vertex(i) => tri.vertex_pn[i],
         };
@@ -346,7 +345,7 @@ impl TriangleMesh {
         let normal = match (tri.shading, c.feature) {
             (Some(ns), _) => (c.barycentric.x * ns[0] + c.barycentric.y * ns[1] + c.barycentric.z * ns[2]).try_normalize().unwrap_or(pseudo),
             // ∇(±|p − c|) over a face is its normal on both sides, exactly.
-            (None, Feature::Face) => tri.n,
+            (None, Feature::Face) => pseudo,
             // The offset normalised, rescaled first (not offset / distance: the closest-point
             // test's distance is rounded apart from |offset|, and |offset|² of a tiny mesh is
             // subnormal).
@@ -370,7 +369,7 @@ impl TriangleMesh {
     /// where `m` changes by at most `shading_lipschitz × length`; the triangle's vertex normals
     /// bound it too.
     fn shading_cos_range(&self, i: u32, d: DVec3, b0: DVec3, length: f64) -> Option<[f64; 2]> {
-        let tri = &self.triangles[i as usize];
+        let tri = &self.attributes[i as usize];
         let ns = tri.shading?;
         let m0 = b0.x * ns[0] + b0.y * ns[1] + b0.z * ns[2];
         let spread = tri.shading_lipschitz * length;
@@ -455,16 +454,11 @@ impl TriangleMesh {
     /// closest one when that piece is short. `None` when neither certifies `p`.
     fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> Option<SegmentBound> {
         let piece_of = |i: u32| self.regions[i as usize].piece(self.triangles[i as usize].n, p, d, length).map(|piece| (i, piece.length));
-        let hinted = cache.hint.filter(|(q, _)| *q == p).and_then(|(_, i)| piece_of(i));
-        let (i, piece) = match hinted {
-            Some(found) if found.1 >= SHORT_PIECE * length => found,
-            _ => {
-                let closest = self.closest(p, Self::hint(cache)).triangle;
-                match (hinted, piece_of(closest)) {
-                    (Some(a), Some(b)) => if a.1 >= b.1 { a } else { b },
-                    (a, b) => a.or(b)?,
-                }
-            }
+        // A triangle recorded at `p` is the closest there (every query and bound records the
+        // closest): asking again would find it, or one as close, again.
+        let (i, piece) = match cache.hint.filter(|(q, _)| *q == p) {
+            Some((_, i)) => piece_of(i)?,
+            None => piece_of(self.closest(p, Self::hint(cache)).triangle)?,
         };
         // A sliver (the start on the region's boundary, up to rounding) would not advance.
         if piece < MIN_PIECE * length {
@@ -475,7 +469,8 @@ impl TriangleMesh {
         let (start, end) = (closest_on_triangle(tri, p, i), closest_on_triangle(tri, end_p, i));
         let plane = [tri.n.dot(p - tri.p[0]), tri.n.dot(end_p - tri.p[0])];
         let pad = PAD * self.epsilon;
-        let cos = match tri.shading {
+        let attributes = &self.attributes[i as usize];
+        let cos = match attributes.shading {
             None => [d.dot(tri.n); 2],
             Some(ns) => {
                 // m(s) = Σ b_i(s) n_i is affine along the piece; |m| is convex, so its minimum
@@ -484,7 +479,7 @@ impl TriangleMesh {
                 let (m0, m1) = (m(start.barycentric), m(end.barycentric));
                 let dm = m1 - m0;
                 let foot = if dm.length_squared() > 0.0 { (-m0.dot(dm) / dm.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-                let min_len = (m0 + foot * dm).length().max(tri.shading_min_length);
+                let min_len = (m0 + foot * dm).length().max(attributes.shading_min_length);
                 if !(min_len > 0.0) {
                     return None;
                 }
@@ -522,7 +517,8 @@ impl MeanSurface for TriangleMesh {
     fn point_on_segment(&self, p: DVec3, cache: &MeshCache) -> Result<SurfacePoint> {
         let found = if cache.candidates.is_empty() { Closest::NONE } else { closest_among(&self.triangles, p, &cache.candidates, Closest::NONE) };
         if found.triangle == Closest::NONE.triangle {
-            return self.point(p);
+            // A query of the whole mesh, from the triangle closest to a point of this ray.
+            return Ok(self.surface_point(p, &self.closest(p, Self::hint(cache))));
         }
         Ok(self.surface_point(p, &found))
     }

@@ -13,11 +13,21 @@ pub(super) enum Feature {
     Vertex(usize),
 }
 
+/// The geometry of one triangle: all that closest-point searches read, kept compact (128 bytes)
+/// so that a search touches few cache lines; the rest is in [`Attributes`].
 #[derive(Clone, Debug)]
 pub(super) struct Triangle {
     pub p: [DVec3; 3],
     /// Unit face normal from the winding; zero for a degenerate (zero-area) triangle.
     pub n: DVec3,
+    /// A bounding sphere (centre, radius): a cheap lower bound of the distance.
+    pub centre: DVec3,
+    pub radius: f64,
+}
+
+/// What a triangle's surface points need beyond its geometry: the sign, the frame and the uv.
+#[derive(Clone, Debug)]
+pub(super) struct Attributes {
     /// Pseudo-normals of the edges (sum of the adjacent faces' normals) and of the corners
     /// (angle-weighted), for the sign of the distance.
     pub edge_pn: [DVec3; 3],
@@ -32,9 +42,6 @@ pub(super) struct Triangle {
     pub dpdu: DVec3,
     /// Texture coordinates of the corners, when the mesh has them.
     pub uv: Option<[DVec2; 3]>,
-    /// A bounding sphere (centre, radius): a cheap lower bound of the distance.
-    pub centre: DVec3,
-    pub radius: f64,
 }
 
 /// The closest point of a triangle to a query point.
@@ -64,8 +71,7 @@ pub(super) fn closer(a: &Closest, b: &Closest) -> bool {
 pub(super) fn closest_among(triangles: &[Triangle], p: DVec3, candidates: &[u32], mut best: Closest) -> Closest {
     for &i in candidates {
         let t = &triangles[i as usize];
-        let gap = (p - t.centre).length() - t.radius;
-        if gap > 0.0 && gap * gap > best.distance_sq * (1.0 + 1e-12) {
+        if !may_be_within(t, p, best.distance_sq) {
             continue;
         }
         let c = closest_on_triangle(t, p, i);
@@ -74,6 +80,20 @@ pub(super) fn closest_among(triangles: &[Triangle], p: DVec3, candidates: &[u32]
         }
     }
     best
+}
+
+/// False when `t` is certainly farther than `sqrt(distance_sq)` from `p`: beyond its plane or its
+/// bounding sphere by more than their rounding, a few ulps of the coordinates (and relative
+/// 1e-12 of the distance, as the distances themselves are rounded).
+pub(super) fn may_be_within(t: &Triangle, p: DVec3, distance_sq: f64) -> bool {
+    let limit = distance_sq * (1.0 + 1e-12);
+    let slack = 1e-14 * (p.abs().max_element() + t.centre.abs().max_element() + t.radius);
+    let plane = (t.n.dot(p - t.p[0]).abs() - slack).max(0.0);
+    if plane * plane > limit {
+        return false;
+    }
+    let gap = ((p - t.centre).length() - t.radius - slack).max(0.0);
+    !(gap * gap > limit)
 }
 
 /// The closest point of triangle `t` (index `index`) to `p`. A degenerate triangle is treated
@@ -138,4 +158,40 @@ pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest
     let denom = 1.0 / sum;
     let (v, w) = (vb * denom, vc * denom);
     make(a + ab * v + ac * w, DVec3::new(1.0 - v - w, v, w), Feature::Face)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    fn triangle(p: [DVec3; 3]) -> Triangle {
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO);
+        let centre = (p[0] + p[1] + p[2]) / 3.0;
+        Triangle { p, n, centre, radius: p.iter().map(|v| (*v - centre).length()).fold(0.0, f64::max) }
+    }
+
+    #[test]
+    fn pruning_never_drops_a_triangle_at_the_search_distance() {
+        // A search keeps every triangle as close as the best so far (ties decide by index), so
+        // the cheap test must pass whenever the distance equals the limit: far and near points,
+        // points on the triangle's plane, slivers, and coordinates offset far from the origin.
+        let mut rng = Pcg32::new(7, 9);
+        let mut uniform = |scale: f64| DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5) * scale;
+        for k in 0..200_000 {
+            let origin = [DVec3::ZERO, DVec3::splat(1e3), DVec3::new(-7e5, 3e5, 1.0)][k % 3];
+            let size = [1.0, 1e-6, 1e4][k / 3 % 3];
+            let mut corners = [origin + uniform(size), origin + uniform(size), origin + uniform(size)];
+            if k % 7 == 0 {
+                corners[2] = corners[0] + 1e-9 * (corners[1] - corners[0]); // a sliver
+            }
+            let t = triangle(corners);
+            let mut p = origin + uniform(size * [1e-9, 1e-3, 1.0, 10.0][k / 9 % 4]);
+            if k % 5 == 0 && t.n != DVec3::ZERO {
+                p -= t.n.dot(p - t.p[0]) * t.n; // on the plane, up to rounding
+            }
+            let c = closest_on_triangle(&t, p, 0);
+            assert!(may_be_within(&t, p, c.distance_sq), "triangle {corners:?} at {} from {p} pruned at its own distance", c.distance_sq.sqrt());
+        }
+    }
 }

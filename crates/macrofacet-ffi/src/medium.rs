@@ -10,6 +10,7 @@ use macrofacet::frame::{check_direction, Frame};
 use macrofacet::medium::{FreeFlight, MacrofacetMedium};
 use macrofacet::params::medium_from_params;
 use macrofacet::phase::PHASE_SAMPLE_DIMENSIONS;
+use macrofacet::tracking::ProjectedAreaBounds;
 use glam::DVec3;
 
 /// Uniform numbers consumed by [`mf_phase_sample`].
@@ -109,6 +110,8 @@ pub struct mf_phase_sample_query {
 /// An immutable macrofacet medium. Safe to share between threads.
 pub struct mf_medium {
     pub(crate) inner: MacrofacetMedium,
+    /// Built once for the tracking calls.
+    pub(crate) bounds: ProjectedAreaBounds,
 }
 
 impl From<mf_vec3> for DVec3 {
@@ -178,7 +181,7 @@ pub unsafe extern "C" fn mf_medium_new(params: *const mf_params, out_medium: *mu
         let params = arg(params, "params")?;
         let slot = out(out_medium, "out_medium")?;
         let inner = medium_from_params(&params.inner)?;
-        *slot = into_handle(mf_medium { inner });
+        *slot = into_handle(mf_medium { bounds: ProjectedAreaBounds::of(&inner), inner });
         Ok(())
     })
 }

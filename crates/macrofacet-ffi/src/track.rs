@@ -16,9 +16,9 @@ use macrofacet::error::{Error, ErrorKind};
 use macrofacet::frame::check_direction;
 use macrofacet::medium::MacrofacetMedium;
 use macrofacet::rng::Pcg32;
-use macrofacet::field::MediumField;
+use macrofacet::field::{Constant, MediumField};
 use macrofacet::surface::MeanSurface;
-use macrofacet::tracking::{TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
+use macrofacet::tracking::{ProjectedAreaBounds, TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
 use glam::DVec3;
 use std::ffi::c_void;
 
@@ -95,6 +95,7 @@ fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64)> {
 struct Call<'a> {
     kind: Kind,
     medium: &'a MacrofacetMedium,
+    bounds: &'a ProjectedAreaBounds,
     field: Option<&'a mf_field>,
     user_data: *mut c_void,
     ray: (DVec3, DVec3, f64),
@@ -116,10 +117,10 @@ impl SurfaceVisitor for Call<'_> {
     type Output = macrofacet::error::Result<Outcome>;
     fn visit<S: MeanSurface>(self, surface: &S) -> Self::Output {
         match self.field {
-            None => self.run(&Tracker::new(self.medium, surface)),
+            None => self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &Constant)),
             Some(field) => {
                 let field = CallbackField::new(field, self.user_data);
-                self.run(&Tracker::with_field(self.medium, surface, &field))
+                self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &field))
             }
         }
     }
@@ -170,7 +171,7 @@ pub(super) fn field_arg<'a>(field: *const mf_field) -> Option<&'a mf_field> {
 }
 
 fn track(kind: Kind, medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<Outcome> {
-    let call = Call { kind, medium: &medium.inner, field, user_data, ray: query(q)?, seed: q.seed };
+    let call = Call { kind, medium: &medium.inner, bounds: &medium.bounds, field, user_data, ray: query(q)?, seed: q.seed };
     Ok(with_surface(surface, user_data, call)?)
 }
 

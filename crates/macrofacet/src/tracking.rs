@@ -34,6 +34,7 @@ use crate::ndf::{MicrofacetDistribution, Ndf, Side};
 use crate::rng::Pcg32;
 use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
 use glam::DVec3;
+use std::borrow::Cow;
 
 /// The PCG32 stream ("mftrack") of the C ABI's tracking calls: `mf_track_*` with `seed` equals
 /// [`Tracker`] with `Pcg32::new(seed, TRACK_STREAM)`.
@@ -119,15 +120,23 @@ const ROULETTE_THRESHOLD: f64 = 0.1;
 /// Relative slack of the majorant check (rounding of `f` and of the projected area).
 const VIOLATION_SLACK: f64 = 1e-9;
 
-/// Upper and lower bounds of `σ(d_local)` over frames with a given range of `d·n`.
+/// Upper and lower bounds of `σ(d_local)` over frames with a given range of `d·n`: what a
+/// tracker derives from its medium's distribution before any segment (two envelope
+/// distributions and a Lipschitz constant, a few hundred instructions and a kilobyte). A host that
+/// tracks many rays through one medium builds them once ([`Tracker::with_bounds`]).
 #[derive(Clone, Copy, Debug)]
-struct ProjectedAreaBounds {
+pub struct ProjectedAreaBounds {
     upper: Ndf,
     lower: Ndf,
     lipschitz: f64,
 }
 
 impl ProjectedAreaBounds {
+    /// The bounds of a medium's distribution.
+    pub fn of(medium: &MacrofacetMedium) -> Self {
+        Self::new(&medium.phase.ndf)
+    }
+
     fn new(ndf: &Ndf) -> Self {
         let (upper, lower) = ndf.isotropic_envelope();
         ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz() }
@@ -216,7 +225,7 @@ pub struct Tracker<'a, S: MeanSurface, F: MediumField = Constant> {
     medium: &'a MacrofacetMedium,
     surface: &'a S,
     field: &'a F,
-    area: ProjectedAreaBounds,
+    area: Cow<'a, ProjectedAreaBounds>,
     isotropic: bool,
     /// The heights of the whole region: the medium's, or the field's largest `σ`.
     region: HeightProfile,
@@ -259,8 +268,18 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
 impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// A medium whose parameters `field` gives per point (`σ_max` must bound its `σ`).
     pub fn with_field(medium: &'a MacrofacetMedium, surface: &'a S, field: &'a F) -> Self {
+        Self::tracker(medium, Cow::Owned(ProjectedAreaBounds::of(medium)), surface, field)
+    }
+
+    /// [`Self::with_field`] with the medium's bounds built beforehand
+    /// ([`ProjectedAreaBounds::of`]`(medium)`; other bounds give wrong majorants).
+    pub fn with_bounds(medium: &'a MacrofacetMedium, bounds: &'a ProjectedAreaBounds, surface: &'a S, field: &'a F) -> Self {
+        Self::tracker(medium, Cow::Borrowed(bounds), surface, field)
+    }
+
+    fn tracker(medium: &'a MacrofacetMedium, area: Cow<'a, ProjectedAreaBounds>, surface: &'a S, field: &'a F) -> Self {
         let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
-        Tracker { medium, surface, field, area: ProjectedAreaBounds::new(&medium.phase.ndf), isotropic: medium.phase.ndf.is_isotropic(), region }
+        Tracker { medium, surface, field, area, isotropic: medium.phase.ndf.is_isotropic(), region }
     }
 
     fn height(&self) -> &HeightProfile {
@@ -473,7 +492,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     fielded = ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi));
                     &fielded
                 }
-                None => &self.area,
+                None => &*self.area,
             };
             let s_up = area.upper(bound.cos) * factor;
             // A wide range of d·n (a segment through a sphere's centre, where d·n turns from −1

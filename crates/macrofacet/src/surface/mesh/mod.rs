@@ -450,19 +450,23 @@ impl TriangleMesh {
     /// The common case of a thin shell, in O(1): a piece of the segment inside the certified
     /// region of one triangle `T` ([`region`]), where `f` is exactly the signed distance to `T`'s
     /// plane and the frame normal is `T`'s interpolated vertex normal (affine along the piece)
-    /// or its face normal. Tries the triangle recorded at `p` (closest there), then asks for the
-    /// closest one when that piece is short. `None` when neither certifies `p`.
-    fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> Option<SegmentBound> {
-        let piece_of = |i: u32| self.regions[i as usize].piece(self.triangles[i as usize].n, p, d, length).map(|piece| (i, piece.length));
+    /// or its face normal, of the triangle closest at `p` (the one recorded there, else a query).
+    /// Otherwise `Err` with the length the general bound should cover: where `p` is about to
+    /// cross the strip beside an edge that no triangle certifies (a ray passing from one
+    /// triangle's region into its neighbour's), only that strip, whose few candidates make the
+    /// general bound cheap; else the whole `length`.
+    fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> std::result::Result<SegmentBound, f64> {
         // A triangle recorded at `p` is the closest there (every query and bound records the
         // closest): asking again would find it, or one as close, again.
-        let (i, piece) = match cache.hint.filter(|(q, _)| *q == p) {
-            Some((_, i)) => piece_of(i)?,
-            None => piece_of(self.closest(p, Self::hint(cache)).triangle)?,
+        let i = match cache.hint.filter(|(q, _)| *q == p) {
+            Some((_, i)) => i,
+            None => self.closest(p, Self::hint(cache)).triangle,
         };
+        let region = &self.regions[i as usize];
+        let piece = region.piece(self.triangles[i as usize].n, p, d, length).map_or(0.0, |piece| piece.length);
         // A sliver (the start on the region's boundary, up to rounding) would not advance.
         if piece < MIN_PIECE * length {
-            return None;
+            return Err(region.strip_crossing(p, d).map_or(length, |strip| length.min(strip)));
         }
         let tri = &self.triangles[i as usize];
         let end_p = p + piece * d;
@@ -481,7 +485,7 @@ impl TriangleMesh {
                 let foot = if dm.length_squared() > 0.0 { (-m0.dot(dm) / dm.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
                 let min_len = (m0 + foot * dm).length().max(attributes.shading_min_length);
                 if !(min_len > 0.0) {
-                    return None;
+                    return Err(length);
                 }
                 let (a, b) = (d.dot(m0).min(d.dot(m1)), d.dot(m0).max(d.dot(m1)));
                 // d·m lies in [a, b]; dividing by |m| ∈ [min_len, 1] can magnify it up to 1/min_len.
@@ -491,7 +495,7 @@ impl TriangleMesh {
         cache.candidates.clear();
         cache.candidates.push(i);
         cache.hint = Some((end_p, i));
-        Some(SegmentBound {
+        Ok(SegmentBound {
             length: piece,
             f_lo: [plane[0] - pad, plane[1] - pad],
             f_hi: [plane[0] + pad, plane[1] + pad],
@@ -524,9 +528,10 @@ impl MeanSurface for TriangleMesh {
     }
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> Result<SegmentBound> {
-        if let Some(bound) = self.certified_bound(p, d, length, cache) {
-            return Ok(bound);
-        }
+        let length = match self.certified_bound(p, d, length, cache) {
+            Ok(bound) => return Ok(bound),
+            Err(general) => general,
+        };
         // The candidates: the union of the grid's lists along the segment, less the triangles
         // that cannot be closest anywhere on it (the closest triangle to q(s) lies within
         // |f(q(s))| <= tent(s) = min(|f(p)| + s, |f(end)| + L − s) of it, f being 1-Lipschitz).

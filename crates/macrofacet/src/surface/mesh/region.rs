@@ -31,6 +31,9 @@ const LEVELS: usize = 6;
 /// The certified heights stop at this many longest edges of the triangle (a shell that thick
 /// spans many triangles and takes the general bound anyway).
 const HEIGHT_EDGES: f64 = 0.5;
+/// The uncertified strip beside an edge is taken as this many of the first margins of the
+/// triangle being left wide (its own, and its neighbour's of up to three times the inradius).
+const STRIP_MARGINS: f64 = 4.0;
 
 /// One triangle's certified regions on both sides of its face.
 #[derive(Clone, Copy, Debug)]
@@ -151,6 +154,21 @@ impl FaceRegion {
             Some(level) => if t >= 0.0 { t <= self.height[0][level] } else { -t <= self.height[1][level] },
             None => false,
         }
+    }
+
+    /// Where a segment from `p` on the boundary of the region's first inset (margin
+    /// `margin[1]`, the smallest that certifies any height), heading out across an edge, is past
+    /// the strip along that edge that no triangle certifies (the margins of this triangle and of
+    /// its neighbour, taken as up to [`STRIP_MARGINS`] of this one's): the length over which only
+    /// the general bound applies. `None` when `p` is not on that boundary heading out.
+    pub fn strip_crossing(&self, p: DVec3, d: DVec3) -> Option<f64> {
+        let m = self.margin[1];
+        (0..3)
+            .filter_map(|k| {
+                let (e, de) = (self.inward[k].dot(p) + self.offset[k], self.inward[k].dot(d));
+                (de < 0.0 && e >= 0.5 * m && e <= m * (1.0 + 1e-9) + 1e-12 * self.plane.abs()).then(|| (e + STRIP_MARGINS * m) / -de)
+            })
+            .reduce(f64::max)
     }
 
     /// The longest certified piece of the segment `p + s d`, `s ∈ [0, length]`, of triangle `t`

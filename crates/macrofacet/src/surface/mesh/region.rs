@@ -105,8 +105,11 @@ impl FaceRegion {
             if j as usize == i {
                 continue;
             }
+            // A triangle at distance D from T is farther than any point of T's prism up to D/2
+            // above or below it: heights up to half the gap need no test against it.
+            let half_gap = 0.5 * gap(j);
             let highest = height.iter().flatten().copied().fold(0.0, f64::max);
-            if 0.5 * gap(j) > highest {
+            if half_gap > highest {
                 break;
             }
             let other = &triangles[j as usize];
@@ -126,6 +129,9 @@ impl FaceRegion {
                 }
                 let cone = corner.and_then(|k| corner_cone(t, k, other, s * n));
                 for level in 0..LEVELS {
+                    if height[side][level] <= half_gap {
+                        continue;
+                    }
                     let inset = &insets[level];
                     let by_cone = match (cone, corner) {
                         (Some(per_distance), Some(k)) => per_distance * (inset[k] - t.p[k]).length(),

@@ -41,6 +41,12 @@ const MAX_CANDIDATES: usize = 16;
 /// The bounds are padded by this many `epsilon` (rounding, and an undetermined sign right at
 /// the start of a segment).
 const PAD: f64 = 8.0;
+/// A point query tries the certified regions of this many triangles of its cell's list (the
+/// nearest to the cell's centre first) before searching the whole list, which finds the same
+/// closest point: a region certified at the query point is nearly always among the first few,
+/// and trying the rest cost more than it saved (of 2, 3, 4, 8 and all, 4 ran the fewest
+/// instructions on the torus anchor, 1.6 % fewer than all).
+const CERTIFIED_TRIES: usize = 4;
 /// Certified pieces shorter than this fraction of the segment are left to the general bound.
 const MIN_PIECE: f64 = 1e-3;
 /// The grid's cells, in mean edge lengths.
@@ -274,7 +280,7 @@ impl TriangleMesh {
             return closest_on_triangle(&self.triangles[i as usize], p, i);
         }
         if let Some(list) = self.grid.list_at(p) {
-            if let Some(&i) = list.iter().find(|&&i| certified(i)) {
+            if let Some(&i) = list.iter().take(CERTIFIED_TRIES).find(|&&i| certified(i)) {
                 return closest_on_triangle(&self.triangles[i as usize], p, i);
             }
             let found = closest_among(&self.triangles, p, list, Closest::NONE);

@@ -203,6 +203,10 @@ impl FaceRegion {
             } else if dt < 0.0 {
                 reach = reach.min((below + t0) / -dt);
             }
+            // (No level reaches beyond the segment.)
+            if reach >= length {
+                return Some(Piece { length });
+            }
             if reach > best.unwrap_or(0.0) {
                 best = Some(reach);
             }

@@ -380,7 +380,22 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut f = start.f;
         let mut exact = true;
         for _ in 0..MAX_SKIPS {
-            if !(f > threshold) || !(t < t_exit) {
+            if !(t < t_exit) {
+                break;
+            }
+            // Between the top face and the threshold, only a step the surface knows exactly.
+            if exact && f > top && !(f > threshold) {
+                let Some(step) = self.surface.rising_clearance(&start, p, d, top, cache) else { break };
+                t += step;
+                if !(t < t_exit) {
+                    break;
+                }
+                p = ray_point(origin, t, d)?;
+                start = self.checked(self.surface.start_point(p, cache), p, stats)?;
+                f = start.f;
+                continue;
+            }
+            if !(f > threshold) {
                 break;
             }
             // An exact query knows more than the Lipschitz bound when the surface does.

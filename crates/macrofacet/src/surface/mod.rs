@@ -223,6 +223,15 @@ pub trait MeanSurface {
         (start.f - level) / self.lipschitz()
     }
 
+    /// A distance along `d` from `p` (where `start = point(p)` and `start.f > level`) over which
+    /// `f` provably does not fall below `level`, from what the surface knows exactly there (not
+    /// from its Lipschitz bound); `None` when it knows nothing more. The tracker steps by it even
+    /// right above the top face: a ray leaving the shell crosses the empty space beside it
+    /// without bounding empty segments.
+    fn rising_clearance(&self, _start: &SurfacePoint, _p: DVec3, _d: DVec3, _level: f64, _cache: &mut Self::Cache) -> Option<f64> {
+        None
+    }
+
     /// True when [`Self::clearance`] is the ray's first crossing of `level` (up to rounding),
     /// not a step within a neighbourhood: one step then crosses any empty space above the shell,
     /// and the tracker takes it even right above the top face.

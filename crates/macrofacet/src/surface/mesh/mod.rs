@@ -698,6 +698,19 @@ impl MeanSurface for TriangleMesh {
         (exact * (1.0 - 1e-9) - PAD * self.epsilon).max(lipschitz)
     }
 
+    /// While the ray rises (or runs level) in the certified region of the triangle closest at
+    /// `p`, `f` is its plane distance there, never below its start: the rest of that region.
+    fn rising_clearance(&self, _start: &SurfacePoint, p: DVec3, d: DVec3, _level: f64, cache: &mut MeshCache) -> Option<f64> {
+        let (_, i) = cache.hint.filter(|(q, _)| *q == p)?;
+        let tri = &self.triangles[i as usize];
+        if !(tri.n.dot(d) >= 0.0) {
+            return None;
+        }
+        let piece = self.regions[i as usize].piece(tri.n, p, d, f64::INFINITY)?;
+        let length = piece.length * (1.0 - 1e-9) - PAD * self.epsilon;
+        (length > 0.0).then_some(length)
+    }
+
     fn distance_bound(&self, p: DVec3) -> f64 {
         self.grid.distance_bound(p)
     }

@@ -134,6 +134,8 @@ pub struct ProjectedAreaBounds {
     upper: Ndf,
     lower: Ndf,
     lipschitz: f64,
+    /// The distribution they bound.
+    source: Ndf,
 }
 
 impl ProjectedAreaBounds {
@@ -144,7 +146,7 @@ impl ProjectedAreaBounds {
 
     fn new(ndf: &Ndf) -> Self {
         let (upper, lower) = ndf.isotropic_envelope();
-        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz() }
+        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf }
     }
 
     /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent.
@@ -277,9 +279,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     }
 
     /// [`Self::with_field`] with the medium's bounds built beforehand
-    /// ([`ProjectedAreaBounds::of`]`(medium)`; other bounds give wrong majorants).
+    /// ([`ProjectedAreaBounds::of`]`(medium)`; bounds of another distribution are not used, the
+    /// tracker builds its own).
     pub fn with_bounds(medium: &'a MacrofacetMedium, bounds: &'a ProjectedAreaBounds, surface: &'a S, field: &'a F) -> Self {
-        Self::tracker(medium, Cow::Borrowed(bounds), surface, field)
+        let area = if bounds.source == medium.phase.ndf { Cow::Borrowed(bounds) } else { Cow::Owned(ProjectedAreaBounds::of(medium)) };
+        Self::tracker(medium, area, surface, field)
     }
 
     fn tracker(medium: &'a MacrofacetMedium, area: Cow<'a, ProjectedAreaBounds>, surface: &'a S, field: &'a F) -> Self {
@@ -367,6 +371,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     /// Far above the shell, steps of `f − top` (the signed distance is 1-Lipschitz, so the shell
     /// cannot begin before): cheaper than bounding a long segment with many candidate features.
+    /// Nearer, only steps the surface knows exactly ([`MeanSurface::rising_clearance`]).
     /// Returns the new distance, position and surface point.
     /// Between exact queries the surface's cheap lower bound of `|f|` keeps the steps going: the
     /// ray stays above the top face (`f >= top > 0` after a step of `f − top`), so there `f` is at

@@ -943,3 +943,31 @@ fn closed_form_area_bounds_hold_for_random_rays_around_a_sphere() {
         assert_eq!(stats.majorant_violations, 0, "sigma {sigma}, {ndf:?}: {stats:?}");
     }
 }
+
+#[test]
+fn bounds_built_once_match_the_trackers_own() {
+    // A host builds a medium's projected-area bounds once (Tracker::with_bounds); they give the
+    // tracker's own numbers. Bounds of another distribution are not used: a rough one's would
+    // change the majorant (the other way round, break it).
+    use macrofacet::tracking::ProjectedAreaBounds;
+    let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
+    let smooth = medium(Ndf::Beckmann(Beckmann::new(0.1, 0.1).unwrap()), 0.01);
+    let rough = medium(Ndf::Gpss(Gpss::new(1.0, 1.0, 1.0).unwrap()), 0.01);
+    let (own, foreign) = (ProjectedAreaBounds::of(&smooth), ProjectedAreaBounds::of(&rough));
+    let fresh = Tracker::new(&smooth, &sphere);
+    let (shared, mismatched) = (Tracker::with_bounds(&smooth, &own, &sphere, &Constant), Tracker::with_bounds(&smooth, &foreign, &sphere, &Constant));
+    let mut rng = Pcg32::new(21, 7);
+    for i in 0..500u64 {
+        let o = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, 3.0);
+        let d = (DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, 0.0) - o).normalize();
+        let run = |tracker: &Tracker<Sphere>| {
+            let mut stats = TrackStats::default();
+            let flight = tracker.sample_free_flight(o, d, 10.0, &mut Pcg32::new(i, 1), &mut stats).unwrap();
+            let transmittance = tracker.transmittance(o, d, 10.0, &mut Pcg32::new(i, 2), &mut stats).unwrap();
+            (flight, transmittance, stats)
+        };
+        let expected = run(&fresh);
+        assert_eq!(run(&shared), expected, "ray {i}: bounds built once differ");
+        assert_eq!(run(&mismatched), expected, "ray {i}: another distribution's bounds were used");
+    }
+}

@@ -34,7 +34,6 @@ use crate::ndf::{MicrofacetDistribution, Ndf, Side};
 use crate::rng::Pcg32;
 use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
 use glam::DVec3;
-use std::borrow::Cow;
 
 /// The PCG32 stream ("mftrack") of the C ABI's tracking calls: `mf_track_*` with `seed` equals
 /// [`Tracker`] with `Pcg32::new(seed, TRACK_STREAM)`.
@@ -232,10 +231,26 @@ pub struct Tracker<'a, S: MeanSurface, F: MediumField = Constant> {
     medium: &'a MacrofacetMedium,
     surface: &'a S,
     field: &'a F,
-    area: Cow<'a, ProjectedAreaBounds>,
+    area: Area<'a>,
     isotropic: bool,
     /// The heights of the whole region: the medium's, or the field's largest `σ`.
     region: HeightProfile,
+}
+
+/// A tracker's projected-area bounds: the host's, or its own (boxed: a tracker is built per
+/// call and moved, and the bounds are kilobytes).
+enum Area<'a> {
+    Borrowed(&'a ProjectedAreaBounds),
+    Owned(Box<ProjectedAreaBounds>),
+}
+
+impl Area<'_> {
+    fn get(&self) -> &ProjectedAreaBounds {
+        match self {
+            Area::Borrowed(bounds) => bounds,
+            Area::Owned(bounds) => bounds,
+        }
+    }
 }
 
 /// The field of a stationary medium.
@@ -275,18 +290,18 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
 impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// A medium whose parameters `field` gives per point (`σ_max` must bound its `σ`).
     pub fn with_field(medium: &'a MacrofacetMedium, surface: &'a S, field: &'a F) -> Self {
-        Self::tracker(medium, Cow::Owned(ProjectedAreaBounds::of(medium)), surface, field)
+        Self::tracker(medium, Area::Owned(Box::new(ProjectedAreaBounds::of(medium))), surface, field)
     }
 
     /// [`Self::with_field`] with the medium's bounds built beforehand
     /// ([`ProjectedAreaBounds::of`]`(medium)`; bounds of another distribution are not used, the
     /// tracker builds its own).
     pub fn with_bounds(medium: &'a MacrofacetMedium, bounds: &'a ProjectedAreaBounds, surface: &'a S, field: &'a F) -> Self {
-        let area = if bounds.source == medium.phase.ndf { Cow::Borrowed(bounds) } else { Cow::Owned(ProjectedAreaBounds::of(medium)) };
+        let area = if bounds.source == medium.phase.ndf { Area::Borrowed(bounds) } else { Area::Owned(Box::new(ProjectedAreaBounds::of(medium))) };
         Self::tracker(medium, area, surface, field)
     }
 
-    fn tracker(medium: &'a MacrofacetMedium, area: Cow<'a, ProjectedAreaBounds>, surface: &'a S, field: &'a F) -> Self {
+    fn tracker(medium: &'a MacrofacetMedium, area: Area<'a>, surface: &'a S, field: &'a F) -> Self {
         let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
         Tracker { medium, surface, field, area, isotropic: medium.phase.ndf.is_isotropic(), region }
     }
@@ -517,7 +532,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     fielded = ProjectedAreaBounds::new(&self.medium.isotropic_ndf(hi));
                     &fielded
                 }
-                None => &*self.area,
+                None => self.area.get(),
             };
             let s_up = area.upper(bound.cos) * factor;
             // A wide range of d·n (a segment through a sphere's centre, where d·n turns from −1
@@ -690,7 +705,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             seg.s_lo = match seg.params {
                 ParamBounds { sigma: Some([lo, hi]), .. } if lo < hi => 0.0,
                 ParamBounds { alpha: Some([lo, _]), .. } => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(lo)).lower(seg.bound.cos),
-                _ => self.area.lower(seg.bound.cos),
+                _ => self.area.get().lower(seg.bound.cos),
             };
             // The control's optical depth, in closed form.
             let (h0, h_slope) = seg.bound.upper_line();

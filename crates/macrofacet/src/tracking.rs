@@ -290,7 +290,7 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
 impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// A medium whose parameters `field` gives per point (`σ_max` must bound its `σ`).
     pub fn with_field(medium: &'a MacrofacetMedium, surface: &'a S, field: &'a F) -> Self {
-        Self::tracker(medium, Area::Owned(Box::new(ProjectedAreaBounds::of(medium))), surface, field)
+        Self::assemble(medium, Area::Owned(Box::new(ProjectedAreaBounds::of(medium))), surface, field)
     }
 
     /// [`Self::with_field`] with the medium's bounds built beforehand
@@ -298,10 +298,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// tracker builds its own).
     pub fn with_bounds(medium: &'a MacrofacetMedium, bounds: &'a ProjectedAreaBounds, surface: &'a S, field: &'a F) -> Self {
         let area = if bounds.source == medium.phase.ndf { Area::Borrowed(bounds) } else { Area::Owned(Box::new(ProjectedAreaBounds::of(medium))) };
-        Self::tracker(medium, area, surface, field)
+        Self::assemble(medium, area, surface, field)
     }
 
-    fn tracker(medium: &'a MacrofacetMedium, area: Area<'a>, surface: &'a S, field: &'a F) -> Self {
+    fn assemble(medium: &'a MacrofacetMedium, area: Area<'a>, surface: &'a S, field: &'a F) -> Self {
         let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
         Tracker { medium, surface, field, area, isotropic: medium.phase.ndf.is_isotropic(), region }
     }

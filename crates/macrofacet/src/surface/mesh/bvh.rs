@@ -36,9 +36,9 @@ impl Node {
     fn distances_sq(&self, p: DVec3) -> [f64; WIDTH] {
         let mut d = [0.0; WIDTH];
         for (axis, c) in [p.x, p.y, p.z].into_iter().enumerate() {
-            for k in 0..WIDTH {
+            for (k, dk) in d.iter_mut().enumerate() {
                 let t = (self.lo[axis][k] - c).max(c - self.hi[axis][k]).max(0.0);
-                d[k] += t * t;
+                *dk += t * t;
             }
         }
         d
@@ -98,16 +98,16 @@ impl Bvh {
             // smaller index wins ties; never an empty slot, nor a box at an infinite or NaN
             // distance), pushed farthest first by insertion.
             let base = top;
-            for k in 0..WIDTH {
-                if !(d[k] <= best.distance_sq && d[k] < f64::INFINITY) {
+            for (k, &dk) in d.iter().enumerate() {
+                if !(dk <= best.distance_sq && dk < f64::INFINITY) {
                     continue;
                 }
                 let mut at = top;
-                while at > base && stack[at - 1].2 < d[k] {
+                while at > base && stack[at - 1].2 < dk {
                     stack[at] = stack[at - 1];
                     at -= 1;
                 }
-                stack[at] = (n.first[k], n.count[k], d[k]);
+                stack[at] = (n.first[k], n.count[k], dk);
                 top += 1;
             }
             // The next inner node; leaves on the way are searched at once.
@@ -148,8 +148,8 @@ impl Bvh {
             top -= 1;
             let n = &self.nodes[stack[top] as usize];
             let d = n.distances_sq(p);
-            for k in 0..WIDTH {
-                if !(d[k] <= r2 && d[k] < f64::INFINITY) {
+            for (k, &dk) in d.iter().enumerate() {
+                if !(dk <= r2 && dk < f64::INFINITY) {
                     continue;
                 }
                 if n.is_leaf(k) {

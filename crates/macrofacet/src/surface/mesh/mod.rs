@@ -472,7 +472,9 @@ impl TriangleMesh {
         let piece = region.piece(self.triangles[i as usize].n, p, d, length).map_or(0.0, |piece| piece.length);
         // A sliver (the start on the region's boundary, up to rounding) would not advance.
         if piece < MIN_PIECE * length {
-            return Err(region.strip_crossing(p, d).map_or(length, |strip| length.min(strip)));
+            // (Not below MIN_PIECE of the segment: a sliver triangle's strip may lie below the
+            // rounding of the ray's distance.)
+            return Err(region.strip_crossing(p, d).map_or(length, |strip| length.min(strip.max(MIN_PIECE * length))));
         }
         let tri = &self.triangles[i as usize];
         let end_p = p + piece * d;

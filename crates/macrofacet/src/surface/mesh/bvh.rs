@@ -72,8 +72,7 @@ impl Bvh {
     pub fn build(triangles: &[Triangle]) -> (Bvh, Vec<u32>) {
         let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
         let mut binary = vec![Binary { min: DVec3::ZERO, max: DVec3::ZERO, first: 0, count: 0 }];
-        let centroids: Vec<DVec3> = triangles.iter().map(|t| (t.p[0] + t.p[1] + t.p[2]) / 3.0).collect();
-        fill(&mut binary, triangles, &centroids, &mut order, 0, 0, triangles.len());
+        fill(&mut binary, triangles, &mut order, 0, 0, triangles.len());
         let mut nodes = vec![Node::EMPTY];
         collapse(&binary, 0, &mut nodes, 0);
         (Bvh { nodes, bounds: (binary[0].min, binary[0].max) }, order)
@@ -169,7 +168,7 @@ impl Bvh {
 }
 
 /// Fills binary node `slot` with the hierarchy over `order[first..first + count]`.
-fn fill(nodes: &mut Vec<Binary>, triangles: &[Triangle], centroids: &[DVec3], order: &mut [u32], slot: usize, first: usize, count: usize) {
+fn fill(nodes: &mut Vec<Binary>, triangles: &[Triangle], order: &mut [u32], slot: usize, first: usize, count: usize) {
     let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let (mut cmin, mut cmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for &i in &order[first..first + count] {
@@ -177,8 +176,8 @@ fn fill(nodes: &mut Vec<Binary>, triangles: &[Triangle], centroids: &[DVec3], or
             min = min.min(v);
             max = max.max(v);
         }
-        cmin = cmin.min(centroids[i as usize]);
-        cmax = cmax.max(centroids[i as usize]);
+        cmin = cmin.min(triangles[i as usize].centre);
+        cmax = cmax.max(triangles[i as usize].centre);
     }
     if count <= LEAF_SIZE {
         nodes[slot] = Binary { min, max, first: first as u32, count: count as u32 };
@@ -187,12 +186,12 @@ fn fill(nodes: &mut Vec<Binary>, triangles: &[Triangle], centroids: &[DVec3], or
     let extent = cmax - cmin;
     let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
     let half = count / 2;
-    order[first..first + count].select_nth_unstable_by(half, |&a, &b| centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]));
+    order[first..first + count].select_nth_unstable_by(half, |&a, &b| triangles[a as usize].centre[axis].total_cmp(&triangles[b as usize].centre[axis]));
     let left = nodes.len();
     nodes.extend([Binary { min, max, first: 0, count: 0 }; 2]);
     nodes[slot] = Binary { min, max, first: left as u32, count: 0 };
-    fill(nodes, triangles, centroids, order, left, first, half);
-    fill(nodes, triangles, centroids, order, left + 1, first + half, count - half);
+    fill(nodes, triangles, order, left, first, half);
+    fill(nodes, triangles, order, left + 1, first + half, count - half);
 }
 
 /// Fills 4-wide node `slot` with the children of binary node `b`: its two children, each inner
@@ -242,9 +241,7 @@ mod tests {
             .map(|_| {
                 let a = point();
                 let p = [a, a + 0.2 * point(), a + 0.2 * point()];
-                let n = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO);
-                let centre = (p[0] + p[1] + p[2]) / 3.0;
-                Triangle { p, n, centre, radius: p.iter().map(|v| (*v - centre).length()).fold(0.0, f64::max) }
+                Triangle::new(p, (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO))
             })
             .collect()
     }

@@ -223,8 +223,7 @@ impl TriangleMesh {
                     let u = (ns[0] + ns[1] + ns[2]).try_normalize().unwrap_or(DVec3::ZERO);
                     ns.iter().map(|n| n.dot(u)).fold(f64::INFINITY, f64::min).max(0.0)
                 });
-                let centre = (p[0] + p[1] + p[2]) / 3.0;
-                let geometry = Triangle { p, n, centre, radius: p.iter().map(|v| (*v - centre).length()).fold(0.0, f64::max) };
+                let geometry = Triangle::new(p, n);
                 let attributes = Attributes {
                     edge_pn: [edge(0), edge(1), edge(2)],
                     vertex_pn: w.map(|v| pn(vertex_pn[v as usize])),
@@ -333,6 +332,12 @@ impl TriangleMesh {
         cache.hint.map(|(_, i)| i)
     }
 
+    /// The triangle recorded in `cache` as closest at exactly `p` (every query and bound records
+    /// the closest one).
+    fn hint_at(cache: &MeshCache, p: DVec3) -> Option<u32> {
+        cache.hint.filter(|(q, _)| *q == p).map(|(_, i)| i)
+    }
+
     /// The surface point of a closest-point result.
     fn surface_point(&self, p: DVec3, c: &Closest) -> SurfacePoint {
         let tri = &self.attributes[c.triangle as usize];
@@ -436,10 +441,7 @@ impl TriangleMesh {
         let mut bound = SegmentBound::lipschitz(start.f, length, self.lipschitz());
         if length <= reach {
             // The triangle closest at the start, when the cache recorded it there.
-            let nearest = match cache.hint {
-                Some((q, i)) if q == p => i,
-                _ => self.closest(p, Self::hint(cache)).triangle,
-            };
+            let nearest = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::hint(cache)).triangle);
             let end = closest_on_triangle(&self.triangles[nearest as usize], p + length * d, nearest);
             let chord = [start.f.abs() + PAD * self.epsilon, end.distance_sq.sqrt() + PAD * self.epsilon];
             if start.f > 0.0 {
@@ -464,10 +466,7 @@ impl TriangleMesh {
     fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> std::result::Result<SegmentBound, f64> {
         // A triangle recorded at `p` is the closest there (every query and bound records the
         // closest): asking again would find it, or one as close, again.
-        let i = match cache.hint.filter(|(q, _)| *q == p) {
-            Some((_, i)) => i,
-            None => self.closest(p, Self::hint(cache)).triangle,
-        };
+        let i = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::hint(cache)).triangle);
         let region = &self.regions[i as usize];
         let piece = region.piece(self.triangles[i as usize].n, p, d, length).map_or(0.0, |piece| piece.length);
         // A sliver (the start on the region's boundary, up to rounding) would not advance.
@@ -691,7 +690,7 @@ impl MeanSurface for TriangleMesh {
     /// the plane distance's crossing of `level`, else to the region's end.
     fn clearance(&self, start: &SurfacePoint, p: DVec3, d: DVec3, level: f64, cache: &mut MeshCache) -> f64 {
         let lipschitz = start.f - level;
-        let Some((_, i)) = cache.hint.filter(|(q, _)| *q == p) else { return lipschitz };
+        let Some(i) = Self::hint_at(cache, p) else { return lipschitz };
         let tri = &self.triangles[i as usize];
         let Some(piece) = self.regions[i as usize].piece(tri.n, p, d, f64::INFINITY) else { return lipschitz };
         // f = n·(q − p0) along the piece.
@@ -703,7 +702,7 @@ impl MeanSurface for TriangleMesh {
     /// While the ray rises (or runs level) in the certified region of the triangle closest at
     /// `p`, `f` is its plane distance there, never below its start: the rest of that region.
     fn rising_clearance(&self, _start: &SurfacePoint, p: DVec3, d: DVec3, _level: f64, cache: &mut MeshCache) -> Option<f64> {
-        let (_, i) = cache.hint.filter(|(q, _)| *q == p)?;
+        let i = Self::hint_at(cache, p)?;
         let tri = &self.triangles[i as usize];
         if !(tri.n.dot(d) >= 0.0) {
             return None;

@@ -25,6 +25,15 @@ pub(super) struct Triangle {
     pub radius: f64,
 }
 
+impl Triangle {
+    /// Corners `p` and unit normal `n` (zero for a degenerate triangle), with the bounding sphere
+    /// about the centroid.
+    pub fn new(p: [DVec3; 3], n: DVec3) -> Triangle {
+        let centre = (p[0] + p[1] + p[2]) / 3.0;
+        Triangle { p, n, centre, radius: p.iter().map(|v| (*v - centre).length()).fold(0.0, f64::max) }
+    }
+}
+
 /// What a triangle's surface points need beyond its geometry: the sign, the frame and the uv.
 #[derive(Clone, Debug)]
 pub(super) struct Attributes {
@@ -166,9 +175,7 @@ mod tests {
     use crate::rng::Pcg32;
 
     fn triangle(p: [DVec3; 3]) -> Triangle {
-        let n = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO);
-        let centre = (p[0] + p[1] + p[2]) / 3.0;
-        Triangle { p, n, centre, radius: p.iter().map(|v| (*v - centre).length()).fold(0.0, f64::max) }
+        Triangle::new(p, (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO))
     }
 
     #[test]

@@ -10,7 +10,7 @@
 //! standard normal in the orthogonal plane. This is exact importance sampling of the generalized
 //! vNDF, which seeds/000 leaves as future work (it uses the mixture of seeds/000 Eq. 40).
 
-use crate::special::{erfc, erfcx, normal_cdf, normal_pdf};
+use crate::special::{erfcx, normal_cdf, normal_pdf};
 use glam::{DMat3, DVec3};
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
@@ -36,19 +36,17 @@ pub(crate) enum Spread {
 }
 
 /// `E[max(0, w·g)]` for `w·g` of mean `w_z` and `s = sqrt(2)` times its standard deviation:
-/// `s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (seeds/000 Eq. 32's `a`), written with `erfcx`
-/// for `a < 0` so that grazing-from-below directions do not cancel. Increasing in `w_z` and in `s`.
+/// `s (a Φ(√2 a) + φ(√2 a)/√2)` with `a = w_z / s` (seeds/000 Eq. 32's `a`), written as
+/// `s (max(a, 0) + e^{−a²} (1/√π − |a| erfcx(|a|)) / 2)`: with `erfc(−a) = 2 − e^{−a²} erfcx(a)`
+/// for `a ≥ 0`, one `erfcx` and one `exp` on both sides, and no cancellation for grazing-from-below
+/// directions (`a < 0`, where the first term is 0). Increasing in `w_z` and in `s`.
 pub(crate) fn expected_positive_part(w_z: f64, s: f64) -> f64 {
     if s == 0.0 {
         return w_z.max(0.0);
     }
     let a = w_z / s;
-    let p = if a >= 0.0 {
-        0.5 * a * erfc(-a) + 0.5 * FRAC_1_SQRT_PI * (-a * a).exp()
-    } else {
-        0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI + a * erfcx(-a))
-    };
-    s * p
+    let tail = 0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a.abs() * erfcx(a.abs()));
+    s * (a.max(0.0) + tail)
 }
 
 impl GaussianGradient {

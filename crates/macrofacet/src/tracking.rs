@@ -72,8 +72,10 @@ pub enum TrackedFlight {
     Pass,
 }
 
-/// Segments tracked per call before giving up with an error. Empty segments double in length,
-/// so even an unbounded surface with `t_max = +∞` ends long before this. Built for fuzzing
+/// Segments tracked per call before giving up with an error (not counting the free flights'
+/// segments that start at a rejected tentative collision, which [`MAX_TENTATIVE`] bounds).
+/// Empty segments double in length, so even an unbounded surface with `t_max = +∞` ends long
+/// before this. Built for fuzzing
 /// (`cfg(fuzzing)`, set by cargo-fuzz), this cap and the next are 16 times lower: calls that
 /// reach them took ~0.1–1 s each and held the fuzzers to ~100 executions/s; the paths are the
 /// same, and no call of the regression tests comes near either cap.
@@ -559,13 +561,26 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     }
 
     /// `σ_t`, the surface point and the local parameters at the tentative collision `s` of
-    /// `seg`, counted in `stats`.
-    fn at_tentative(&self, seg: &Segment, s: f64, d: DVec3, cache: &S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint, LocalParams)> {
+    /// `seg`, counted in `stats`. On a segment whose bound gave no end point (a start there costs
+    /// the surface a full query, e.g. a mesh away from its certified regions) the query is a
+    /// [`MeanSurface::start_point`]: it leaves in the cache what the next query and a segment
+    /// starting there use ([`Self::restarts_at_tentative`]).
+    fn at_tentative(&self, seg: &Segment, s: f64, d: DVec3, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, SurfacePoint, LocalParams)> {
         let p = ray_point(seg.p, s, d)?;
-        let point = self.checked(self.surface.point_on_segment(p, cache), p, stats)?;
+        let point = if Self::restarts_at_tentative(seg) { self.surface.start_point(p, cache) } else { self.surface.point_on_segment(p, cache) };
+        let point = self.checked(point, p, stats)?;
         let (sigma_t, local) = self.sigma_t_at(p, &point, d)?;
         stats.tentative_collisions += 1;
         Ok((sigma_t, point, local))
+    }
+
+    /// True when a free flight ends `seg` at a rejected tentative collision and starts the next
+    /// segment there: its bound gave no end point, so the next start would cost a full query,
+    /// while the tentative collision's is already made, and a bound from there is tighter than
+    /// the rest of this one (on a mesh, a Lipschitz bound no longer than `|f|` at its start).
+    /// Delta tracking stays unbiased: each segment's majorant depends only on the ray before it.
+    fn restarts_at_tentative(seg: &Segment) -> bool {
+        seg.bound.end.is_none()
     }
 
     /// What the next segment needs to know of `seg`: empty (no tentative collision, nothing
@@ -650,7 +665,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;
         let mut previous = Previous::None;
         let mut budget = 0u64;
-        for _ in 0..MAX_SEGMENTS {
+        // Segments that start at a rejected tentative collision spend the tentative budget.
+        let mut segments = 0;
+        while segments < MAX_SEGMENTS {
             (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
                 return Ok(TrackedFlight::Pass);
@@ -658,26 +675,41 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             let seg = self.next_segment(t, p, &start, d, t_exit - t, previous, &mut cache, stats)?;
             let mut s = 0.0;
             let mut tentative = false;
+            let mut restart = None;
             while let Some(next) = self.next_tentative(&seg, s, rng) {
                 s = next;
                 tentative = true;
                 spend_tentative(&mut budget, origin, d)?;
-                let (sigma_t, point, local) = self.at_tentative(&seg, s, d, &cache, stats)?;
+                let (sigma_t, point, local) = self.at_tentative(&seg, s, d, &mut cache, stats)?;
                 let mu = self.majorant(&seg, s);
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
                 }
+                let p = seg.p + s * d;
                 if rng.next_f64() * mu < sigma_t {
                     // A host's normal is taken within 1e-4 of unit length; the collision's
                     // frame is unit (found by fuzzing: length 1.00005 came back). Its uv is
                     // completed where the tracker's queries left it out (MeanSurface::uv).
-                    let p = seg.p + s * d;
                     let point = SurfacePoint { normal: point.normal.normalize(), uv: self.surface.uv(p, &point), ..point };
                     return Ok(TrackedFlight::Scatter { t: seg.t + s, point, local });
                 }
+                // (A tentative collision at the segment's start would not advance the ray.)
+                if Self::restarts_at_tentative(&seg) && seg.t + s > seg.t {
+                    restart = Some((seg.t + s, p, point));
+                    break;
+                }
             }
-            previous = self.previous(&seg, tentative);
-            (t, p, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
+            (t, p, start) = match restart {
+                Some(at) => {
+                    previous = Previous::None;
+                    at
+                }
+                None => {
+                    segments += 1;
+                    previous = self.previous(&seg, tentative);
+                    self.advance(&seg, origin, d, &mut cache, stats)?
+                }
+            };
         }
         Err(too_many_segments())
     }
@@ -727,7 +759,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 if !(rng.next_f64() * mu < mu - mu_c) {
                     continue;
                 }
-                let (sigma_t, _, _) = self.at_tentative(&seg, s, d, &cache, stats)?;
+                let (sigma_t, _, _) = self.at_tentative(&seg, s, d, &mut cache, stats)?;
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) || sigma_t < mu_c * (1.0 - VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
                 }

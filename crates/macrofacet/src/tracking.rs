@@ -72,8 +72,8 @@ pub enum TrackedFlight {
     Pass,
 }
 
-/// Segments tracked per call before giving up with an error (not counting the free flights'
-/// segments that start at a rejected tentative collision, which [`MAX_TENTATIVE`] bounds).
+/// Segments tracked per call before giving up with an error (not counting the segments that
+/// start at a tentative collision, which [`MAX_TENTATIVE`] bounds).
 /// Empty segments double in length, so even an unbounded surface with `t_max = +∞` ends long
 /// before this. Built for fuzzing
 /// (`cfg(fuzzing)`, set by cargo-fuzz), this cap and the next are 16 times lower: calls that
@@ -574,11 +574,12 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         Ok((sigma_t, point, local))
     }
 
-    /// True when a free flight ends `seg` at a rejected tentative collision and starts the next
-    /// segment there: its bound gave no end point, so the next start would cost a full query,
-    /// while the tentative collision's is already made, and a bound from there is tighter than
-    /// the rest of this one (on a mesh, a Lipschitz bound no longer than `|f|` at its start).
-    /// Delta tracking stays unbiased: each segment's majorant depends only on the ray before it.
+    /// True when a free flight ends `seg` at a rejected tentative collision (a transmittance at a
+    /// residual one) and starts the next segment there: its bound gave no end point, so the next
+    /// start would cost a full query, while the tentative collision's is already made, and a
+    /// bound from there is tighter than the rest of this one (on a mesh, a Lipschitz bound no
+    /// longer than `|f|` at its start). Delta and ratio tracking stay unbiased: each segment's
+    /// majorant and control depend only on the ray before it.
     fn restarts_at_tentative(seg: &Segment) -> bool {
         seg.bound.end.is_none()
     }
@@ -725,7 +726,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut transmittance = 1.0;
         let mut previous = Previous::None;
         let mut budget = 0u64;
-        for _ in 0..MAX_SEGMENTS {
+        // Segments that start at a residual tentative collision spend the tentative budget.
+        let mut segments = 0;
+        while segments < MAX_SEGMENTS {
             (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, &mut cache, stats)?;
             if !(t < t_exit) {
                 return Ok(transmittance);
@@ -739,16 +742,21 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 ParamBounds { alpha: Some([lo, _]), .. } => ProjectedAreaBounds::new(&self.medium.isotropic_ndf(lo)).lower(seg.bound.cos),
                 _ => self.area.get().lower(seg.bound.cos),
             };
-            // The control's optical depth, in closed form.
+            // The control's optical depth, in closed form: over the whole segment at once, or,
+            // where the segment may end at a residual tentative collision (as a free flight's,
+            // Self::restarts_at_tentative), over the part tracked when it ends.
             let (h0, h_slope) = seg.bound.upper_line();
-            if seg.s_lo > 0.0 {
-                transmittance *= (-seg.s_lo * seg.shape.density_integral(h0, h_slope, seg.bound.length)).exp();
+            let control_depth = |length: f64| if seg.s_lo > 0.0 { seg.s_lo * seg.shape.density_integral(h0, h_slope, length) } else { 0.0 };
+            let restartable = Self::restarts_at_tentative(&seg);
+            if seg.s_lo > 0.0 && !restartable {
+                transmittance *= (-control_depth(seg.bound.length)).exp();
                 if !roulette(&mut transmittance, rng) {
                     return Ok(0.0);
                 }
             }
             let mut s = 0.0;
             let mut tentative = false;
+            let mut restart = None;
             while let Some(next) = self.next_tentative(&seg, s, rng) {
                 s = next;
                 tentative = true;
@@ -759,17 +767,41 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 if !(rng.next_f64() * mu < mu - mu_c) {
                     continue;
                 }
-                let (sigma_t, _, _) = self.at_tentative(&seg, s, d, &mut cache, stats)?;
+                let (sigma_t, point, _) = self.at_tentative(&seg, s, d, &mut cache, stats)?;
                 if sigma_t > mu * (1.0 + VIOLATION_SLACK) || sigma_t < mu_c * (1.0 - VIOLATION_SLACK) {
                     stats.majorant_violations += 1;
                 }
                 transmittance *= (1.0 - (sigma_t - mu_c) / (mu - mu_c)).clamp(0.0, 1.0);
+                // Ending the segment here is a stopping time of its tentative collisions: the
+                // next segment's are those of a fresh process from here (unbiased).
+                if restartable && seg.t + s > seg.t {
+                    transmittance *= (-control_depth(s)).exp();
+                    restart = Some((seg.t + s, seg.p + s * d, point));
+                }
                 if !roulette(&mut transmittance, rng) {
                     return Ok(0.0);
                 }
+                if restart.is_some() {
+                    break;
+                }
             }
-            previous = self.previous(&seg, tentative);
-            (t, p, start) = self.advance(&seg, origin, d, &mut cache, stats)?;
+            (t, p, start) = match restart {
+                Some(at) => {
+                    previous = Previous::None;
+                    at
+                }
+                None => {
+                    if seg.s_lo > 0.0 && restartable {
+                        transmittance *= (-control_depth(seg.bound.length)).exp();
+                        if !roulette(&mut transmittance, rng) {
+                            return Ok(0.0);
+                        }
+                    }
+                    segments += 1;
+                    previous = self.previous(&seg, tentative);
+                    self.advance(&seg, origin, d, &mut cache, stats)?
+                }
+            };
         }
         Err(too_many_segments())
     }

@@ -99,6 +99,7 @@ std::shared_ptr<Shape> make_region_boundary(const std::shared_ptr<const Shape>& 
         tri.idx.assign(m.indices, m.indices + 3 * m.triangle_count);
         mf_enclosure_free(enclosure);
         b = std::make_shared<MeshShape>(std::move(tri), "enclosure");
+        b->region_boundary = true;
     }
     b->id = mean->id;
     b->loc = mean->loc;

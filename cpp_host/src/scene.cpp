@@ -116,6 +116,18 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
     rtcIntersect1(scene_, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     const Shape* s = by_geom_id_[rh.hit.geomID];
+    if (s->region_boundary) {
+        // A ray only passes through a region boundary (Shape::region_boundary): where, and on
+        // which side (Embree's geometric normal, oriented as MeshShape::fill_hit's), without
+        // reading the mesh's arrays.
+        *hit = SurfaceHit();
+        hit->t = rh.ray.tfar;
+        hit->p = ray.at(rh.ray.tfar);
+        hit->ng = hit->ns = normalize(Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
+        hit->shape = s;
+        hit->prim = rh.hit.primID;
+        return true;
+    }
     s->fill_hit(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, hit);
     return true;
 }

@@ -91,6 +91,10 @@ public:
     /// hands to the library (mf_params) when it builds the medium on this mean surface.
     std::shared_ptr<const MediumParamBag> interior_bag, exterior_bag;
     const Emitter* emitter = nullptr;  // area emitter attached to this shape (owned by the scene)
+    /// A medium's region boundary built by the renderer (make_region_boundary): null BSDF, no
+    /// emitter, nothing textured. A ray only passes through it, so its hits carry t, p and ng
+    /// alone (Scene::intersect).
+    bool region_boundary = false;
 };
 
 class MeshShape final : public Shape {

@@ -73,10 +73,9 @@ pub enum TrackedFlight {
 }
 
 /// Segments tracked per call before giving up with an error (not counting the segments that
-/// start at a tentative collision, which [`MAX_TENTATIVE`] bounds).
-/// Empty segments double in length, so even an unbounded surface with `t_max = +∞` ends long
-/// before this. Built for fuzzing
-/// (`cfg(fuzzing)`, set by cargo-fuzz), this cap and the next are 16 times lower: calls that
+/// start at a tentative collision, which [`MAX_TENTATIVE`] bounds). Empty segments double in
+/// length, so even an unbounded surface with `t_max = +∞` ends long before this. Built for
+/// fuzzing (`cfg(fuzzing)`, set by cargo-fuzz), this cap and the next are 16 times lower: calls that
 /// reach them took ~0.1–1 s each and held the fuzzers to ~100 executions/s; the paths are the
 /// same, and no call of the regression tests comes near either cap.
 const MAX_SEGMENTS: u32 = if cfg!(fuzzing) { 1 << 12 } else { 1 << 16 };

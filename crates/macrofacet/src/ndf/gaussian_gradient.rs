@@ -45,6 +45,10 @@ pub(crate) fn expected_positive_part(w_z: f64, s: f64) -> f64 {
         return w_z.max(0.0);
     }
     let a = w_z / s;
+    if a.is_infinite() {
+        // s below f64's resolution of w_z (erfcx(∞) = 0 would meet ∞): the limit s → 0.
+        return w_z.max(0.0);
+    }
     let tail = 0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a.abs() * erfcx(a.abs()));
     s * (a.max(0.0) + tail)
 }
@@ -223,5 +227,24 @@ fn initial_guess(c: f64, u: f64) -> f64 {
         let mode = 0.5 * ((c * c + 4.0).sqrt() - c);
         let width = 1.0 / (1.0 + 1.0 / ((mode + c) * (mode + c))).sqrt();
         (mode + width * crate::special::probit(u)).max(-c + 1e-3 * (mode + c))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::expected_positive_part;
+
+    /// `E[max(0, w_z + s N/√2)]` is continuous down to `s = 0`, where it is `max(w_z, 0)`: also
+    /// where `w_z / s` overflows, and it stays finite and increasing in `w_z` across `a = 0`.
+    #[test]
+    fn expected_positive_part_is_continuous_to_the_sharp_limit() {
+        for w_z in [-0.5, -1e-300, 0.0, 1e-300, 0.5] {
+            for s in [0.0, 1e-320, 1e-300] {
+                let p = expected_positive_part(w_z, s);
+                assert!(p.is_finite() && (p - w_z.max(0.0)).abs() <= 1e-15 * w_z.abs() + 1e-299, "w_z {w_z}, s {s}: {p}");
+            }
+        }
+        let values: Vec<f64> = (-400..=400).map(|k| expected_positive_part(k as f64 / 100.0, 0.7)).collect();
+        assert!(values.windows(2).all(|w| w[0] <= w[1] && w[0].is_finite()), "not increasing");
     }
 }

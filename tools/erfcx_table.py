@@ -12,12 +12,13 @@ smooth and slowly varying (`erfcx ~ y/(4 sqrt(pi))` as `y -> 0`). `[0, 1]` is cu
 equal intervals; on interval `i` the local variable is `z = 2 (PIECES y - i) - 1` in `[-1, 1]`,
 and `erfcx` is the Chebyshev interpolant of degree `DEGREE` at the `DEGREE + 1` Chebyshev nodes,
 written in powers of `z` (evaluated by Estrin's scheme). The constant term of the last piece is
-nudged by ulps so that `erfcx(0)` is exactly 1. Only the intervals that `y > 2/15` reaches are written.
+nudged by ulps so that `erfcx(0)` is exactly 1. Only the intervals that `y > 2/15` reaches are
+written.
 
 The interpolants are computed at 40 digits and rounded to f64. The script checks each one at
 `CHECK` points per interval against mpmath and prints the largest relative error of the f64
-evaluation (Python floats, operation for operation as in special.rs); it refuses to write a table worse
-than `LIMIT`.
+evaluation (Python floats, the polynomial evaluated operation for operation as in special.rs); it
+refuses to write a table worse than `LIMIT`.
 """
 
 import math

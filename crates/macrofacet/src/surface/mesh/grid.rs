@@ -166,6 +166,12 @@ impl CellGrid {
     pub fn segment(&self, p: DVec3, d: DVec3, length: f64, out: &mut Vec<u32>) -> bool {
         out.clear();
         let Some(mut c) = self.cell_of(p) else { return false };
+        // A segment that ends outside the band leaves it: known before walking its cells (in a
+        // thick shell most segments start inside the band and end outside, and the walk cost
+        // 4 % of the volume-like torus's rendering).
+        if self.cell_of(p + length * d).is_none_or(|end| self.list(end).is_empty()) {
+            return false;
+        }
         let step = IVec3::new(sign(d.x), sign(d.y), sign(d.z));
         let rel = (p - self.origin) / self.h;
         // Parameter of the next cell boundary along each axis, and between boundaries.

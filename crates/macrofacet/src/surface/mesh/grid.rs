@@ -169,7 +169,11 @@ impl CellGrid {
         // A segment that ends outside the band leaves it: known before walking its cells (in a
         // thick shell most segments start inside the band and end outside, and the walk cost
         // 4 % of the volume-like torus's rendering).
-        if self.cell_of(p + length * d).is_none_or(|end| self.list(end).is_empty()) {
+        let end_outside = match self.cell_of(p + length * d) {
+            Some(end) => self.list(end).is_empty(),
+            None => true,
+        };
+        if end_outside {
             return false;
         }
         let step = IVec3::new(sign(d.x), sign(d.y), sign(d.z));

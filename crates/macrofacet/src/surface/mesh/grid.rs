@@ -154,7 +154,6 @@ impl CellGrid {
         &self.lists[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 
-    /// The closest point to `p` when `p` lies in a cell of the band.
     /// The list of the cell of `p`, nearest to its centre first; `None` outside the band.
     pub fn list_at(&self, p: DVec3) -> Option<&[u32]> {
         let list = self.list(self.cell_of(p)?);
@@ -167,13 +166,9 @@ impl CellGrid {
         out.clear();
         let Some(mut c) = self.cell_of(p) else { return false };
         // A segment that ends outside the band leaves it: known before walking its cells (in a
-        // thick shell most segments start inside the band and end outside, and the walk cost
-        // 4 % of the volume-like torus's rendering).
-        let end_outside = match self.cell_of(p + length * d) {
-            Some(end) => self.list(end).is_empty(),
-            None => true,
-        };
-        if end_outside {
+        // thick shell most segments start inside the band and end outside, where the walk
+        // gathered lists only to drop them; 1.2 % of the volume-like torus's rendering).
+        if self.list_at(p + length * d).is_none() {
             return false;
         }
         let step = IVec3::new(sign(d.x), sign(d.y), sign(d.z));

@@ -1,7 +1,6 @@
 // mfhost — BSDF implementations (see bsdf.h).
 #include "bsdf.h"
 
-#include <complex>
 #include <map>
 
 namespace mf {
@@ -23,15 +22,24 @@ float fresnel_dielectric(float cos_i, float eta, float* cos_t_out) {
     return 0.5f * (rs * rs + rp * rp);
 }
 
+// The unpolarised reflectance of a conductor with complex IOR eta + i k, in real arithmetic (the
+// closed form of the complex amplitudes' squared moduli; Born & Wolf, Principles of Optics,
+// 14.4). With a = Re sqrt(n^2 - sin^2) and a2b2 = |n^2 - sin^2|:
+//   Rs = (a2b2 - 2 a c + c^2) / (a2b2 + 2 a c + c^2),
+//   Rp = Rs (c^2 a2b2 - 2 a c sin^2 + sin^4) / (c^2 a2b2 + 2 a c sin^2 + sin^4).
+// std::complex division went through libgcc's __divdc3 (9 % of a roughconductor render).
 float fresnel_conductor(float cos_i, float eta, float k) {
-    using C = std::complex<double>;
     double c = std::clamp(double(std::fabs(cos_i)), 0.0, 1.0);
-    C n(eta, k);
-    C sin2_t = (1.0 - c * c) / (n * n);
-    C cos_t = std::sqrt(1.0 - sin2_t);
-    C r_perp = (c - n * cos_t) / (c + n * cos_t);
-    C r_par = (n * c - cos_t) / (n * c + cos_t);
-    return float(0.5 * (std::norm(r_perp) + std::norm(r_par)));
+    double c2 = c * c, sin2 = 1.0 - c2;
+    double e = double(eta), kk = double(k);
+    double t = e * e - kk * kk - sin2;
+    double a2b2 = std::sqrt(t * t + 4.0 * e * e * kk * kk);
+    double a = std::sqrt(std::max(0.0, 0.5 * (a2b2 + t)));
+    double s1 = a2b2 + c2, s2 = 2.0 * a * c;
+    double rs = (s1 - s2) / (s1 + s2);
+    double p1 = c2 * a2b2 + sin2 * sin2, p2 = s2 * sin2;
+    double rp = rs * (p1 - p2) / (p1 + p2);
+    return float(0.5 * (rs + rp));
 }
 
 // RGB complex IORs: spectral measurements integrated against the CIE matching functions and

@@ -10,6 +10,7 @@
 //  * The same for the library's distributions behind roughconductor (mf_ndf: GTR, transforms).
 #include <macrofacet.h>
 
+#include <complex>
 #include <random>
 #include <vector>
 
@@ -30,6 +31,22 @@ TEST_CASE(fresnel) {
     CHECK_NEAR(fresnel_conductor(1e-4f, eta, k), 1.0, 1e-3);  // grazing
     // k = 0 reduces to the dielectric formula
     CHECK_NEAR(fresnel_conductor(0.6f, 1.5f, 0.0f), fresnel_dielectric(0.6f, 1.5f, nullptr), 1e-6);
+    // The real-arithmetic form against the complex amplitudes r_s, r_p themselves, over angles
+    // and IORs from the presets' range (and below 1, where a dielectric reflects totally).
+    auto amplitudes = [](double c, double eta, double k) {
+        using C = std::complex<double>;
+        C n(eta, k), cos_t = std::sqrt(1.0 - (1.0 - c * c) / (n * n));
+        C r_s = (c - n * cos_t) / (c + n * cos_t), r_p = (n * c - cos_t) / (n * c + cos_t);
+        return 0.5 * (std::norm(r_s) + std::norm(r_p));
+    };
+    double worst = 0;
+    for (float eta_i : {0.05f, 0.2f, 0.7f, 1.0f, 1.5f, 3.0f})
+        for (float k_i : {0.0f, 0.5f, 3.0f, 8.0f})
+            for (int j = 0; j <= 100; ++j) {
+                float c = j / 100.0f;
+                worst = std::max(worst, std::fabs(fresnel_conductor(c, eta_i, k_i) - amplitudes(c, eta_i, k_i)));
+            }
+    CHECK_NEAR(worst, 0.0, 1e-6);
     ConductorIor ior;
     CHECK(conductor_preset("none", &ior) && ior.perfect);
     CHECK(conductor_preset("Au", &ior) && !ior.perfect);

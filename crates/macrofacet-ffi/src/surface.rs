@@ -430,9 +430,9 @@ impl SurfaceVisitor for BuildEnclosure {
 /// `mf_medium_shell_top` of a medium): the boundary a host gives its ray tracer so that rays find
 /// the medium without marching the signed distance. Conservative (the whole region is inside),
 /// watertight, outward-facing, within one cell diagonal of the level set (L of them for an SDF
-/// grid whose interpolation is L-Lipschitz); made of grid cells of
-/// about `cell_size` (0: 1/128 of the surface's largest extent; at most 512 cells along an axis,
-/// at least 1e5 ulps of the largest coordinate and 1e-53).
+/// grid whose interpolation is L-Lipschitz); made of grid cells of about `cell_size` (0: 1/128 of
+/// the surface's largest extent, or 1/8 of a larger `level`; at most 512 cells along an axis, at
+/// least 1e5 ulps of the largest coordinate and 1e-53).
 /// Needs a surface with a finite bounding box.
 pub struct mf_enclosure {
     positions: Vec<f64>,

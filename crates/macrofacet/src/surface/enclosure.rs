@@ -26,6 +26,12 @@ const MIN_CELL_ULPS: f64 = 1e5;
 /// The smallest cell at all: 1e-3 of the smallest `sigma` ([`SIGMA_RANGE`]), far above where
 /// squared distances underflow (~1e-154).
 const MIN_CELL: f64 = 1e-3 * SIGMA_RANGE.0;
+/// The default cell is at least this fraction of a positive level: the enclosure of a thick
+/// shell then lies within about a fifth of its top (`√3 / 8`), which is all a ray needs to find
+/// it, and its build and mesh shrink with the cells (the default scene's volume-like and
+/// in-between tori: 2.4 G fewer instructions to build, 16 % of the scene's build, for 0.5 %
+/// more in rendering, where rays cross the wider gap in steps of `f − top`).
+const LEVEL_CELLS: f64 = 8.0;
 
 /// A triangle mesh: positions and counter-clockwise (seen from outside) triangles.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -37,7 +43,8 @@ pub struct Enclosure {
 }
 
 /// The enclosure of `f < level` with cells of about `cell` (0: 1/128 of the surface's largest
-/// extent). The surface must have a finite bounding box.
+/// extent, or [`1/LEVEL_CELLS`](LEVEL_CELLS) of a larger level). The surface must have a finite
+/// bounding box.
 pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<Enclosure> {
     let invalid = |m: String| Error::new(ErrorKind::InvalidArgument, m);
     if !level.is_finite() {
@@ -59,7 +66,7 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     // Nor below MIN_CELL, where the surface's squared distances underflow (found by fuzzing:
     // a point-like sphere with cells of 7e-310 answered f = 0 at every corner).
     let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element() + level.max(0.0);
-    let mut h = (if cell > 0.0 { cell } else { extent / 128.0 }).max(MIN_CELL_ULPS * f64::EPSILON * magnitude).max(MIN_CELL);
+    let mut h = (if cell > 0.0 { cell } else { (extent / 128.0).max(level.max(0.0) / LEVEL_CELLS) }).max(MIN_CELL_ULPS * f64::EPSILON * magnitude).max(MIN_CELL);
     let grow = level.max(0.0) + h;
     let (lo, hi) = (bounds.min - DVec3::splat(grow), bounds.max + DVec3::splat(grow));
     if (hi - lo).max_element() / h > MAX_CELLS {

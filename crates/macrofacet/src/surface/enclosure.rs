@@ -17,6 +17,7 @@ use glam::{DVec3, IVec3};
 
 /// Fine cells per coarse block edge (a power of two: blocks halve down to cells).
 const BLOCK: i32 = 8;
+const _: () = assert!(BLOCK > 0 && BLOCK & (BLOCK - 1) == 0, "BLOCK must be a power of two");
 /// The largest grid, in fine cells along the longest axis (the cell grows beyond it); 128 when
 /// built for fuzzing (`cfg(fuzzing)`): a 512-cell enclosure takes up to 0.5 s, a third of a
 /// fuzzer's time at one call in 32 executions.
@@ -318,7 +319,11 @@ impl Kept {
 
     /// Whether the cell `c` (inside the grid) is kept.
     fn contains(&self, c: IVec3) -> bool {
-        let block = c.div_euclid(IVec3::splat(BLOCK));
+        // Inside the grid c >= 0, and BLOCK is a power of two: a shift, where `div_euclid`'s
+        // general division was 5 % of the default scene's build (every face of every kept cell
+        // asks for its neighbour).
+        debug_assert!(c.cmpge(IVec3::ZERO).all());
+        let block = c >> BLOCK.trailing_zeros() as i32;
         match self.block(block) {
             BlockCells::None => false,
             BlockCells::All => true,

@@ -100,14 +100,16 @@ impl FaceRegion {
             let o = &triangles[j as usize];
             (t.centre - o.centre).length() - t.radius - o.radius
         };
-        near.sort_by(|&a, &b| gap(a).total_cmp(&gap(b)));
-        for &j in near.iter() {
+        // (Each gap computed once, not at every comparison; the sort is stable, as before.)
+        let mut by_gap: Vec<(f64, u32)> = near.iter().map(|&j| (gap(j), j)).collect();
+        by_gap.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for &(gap_j, j) in &by_gap {
             if j as usize == i {
                 continue;
             }
             // A triangle at distance D from T is farther than any point of T's prism up to D/2
             // above or below it: heights up to half the gap need no test against it.
-            let half_gap = 0.5 * gap(j);
+            let half_gap = 0.5 * gap_j;
             let highest = height.iter().flatten().copied().fold(0.0, f64::max);
             if half_gap > highest {
                 break;
@@ -128,6 +130,8 @@ impl FaceRegion {
                     candidates[2] = DVec3::ZERO;
                 }
                 let cone = corner.and_then(|k| corner_cone(t, k, other, s * n));
+                // (Per direction once: what does not depend on the level's inset.)
+                let bounds = candidates.map(|u| (u != DVec3::ZERO).then(|| PlaneBound::new(u, s * n, other)));
                 for level in 0..LEVELS {
                     if height[side][level] <= half_gap {
                         continue;
@@ -137,11 +141,7 @@ impl FaceRegion {
                         (Some(per_distance), Some(k)) => per_distance * (inset[k] - t.p[k]).length(),
                         _ => 0.0,
                     };
-                    let best = candidates
-                        .iter()
-                        .filter(|u| **u != DVec3::ZERO)
-                        .map(|&u| certified_height(u, s * n, inset, other, epsilon))
-                        .fold(by_cone, f64::max);
+                    let best = bounds.iter().flatten().map(|b| b.certified_height(inset, epsilon)).fold(by_cone, f64::max);
                     height[side][level] = height[side][level].min(best);
                 }
             }
@@ -257,20 +257,32 @@ fn corner_cone(t: &Triangle, k: usize, other: &Triangle, sn: DVec3) -> Option<f6
     (gap > 0.0).then(|| gap / h_max)
 }
 
-/// The certified height against `other` over the inset triangle `inset` for the direction `u`
-/// (`sn` is the side's normal): the largest `H` with `t (1 − u·sn) <= u·x − max_{y∈T'} u·y` for
-/// all `x` in the inset and `t <= H`; 0 when it fails at `t = 0`, `∞` when unconstrained.
-fn certified_height(u: DVec3, sn: DVec3, inset: &[DVec3; 3], other: &Triangle, epsilon: f64) -> f64 {
-    let reach = other.p.iter().map(|y| u.dot(*y)).fold(f64::NEG_INFINITY, f64::max);
-    let lowest = inset.iter().map(|x| u.dot(*x) - reach).fold(f64::INFINITY, f64::min) - 4.0 * epsilon;
-    let k = 1.0 - u.dot(sn);
-    if k <= 1e-12 {
-        // u = s n: the whole of T' is on the far side (up to rounding), for every height.
-        return if lowest >= -8.0 * epsilon { f64::INFINITY } else { 0.0 };
-    }
-    if lowest < 0.0 {
-        return 0.0;
-    }
-    lowest / k
+/// The lower bound `dist(p, T') >= u·p − max_{y∈T'} u·y` of the distance to a competitor `T'`
+/// along a unit direction `u`, with what it needs for every inset: `reach = max_{y∈T'} u·y` and
+/// `k = 1 − u·sn` (`sn` is the side's normal).
+struct PlaneBound {
+    u: DVec3,
+    reach: f64,
+    k: f64,
 }
 
+impl PlaneBound {
+    fn new(u: DVec3, sn: DVec3, other: &Triangle) -> PlaneBound {
+        PlaneBound { u, reach: other.p.iter().map(|y| u.dot(*y)).fold(f64::NEG_INFINITY, f64::max), k: 1.0 - u.dot(sn) }
+    }
+
+    /// The certified height over the inset triangle `inset`: the largest `H` with
+    /// `t (1 − u·sn) <= u·x − max_{y∈T'} u·y` for all `x` in the inset and `t <= H`; 0 when it
+    /// fails at `t = 0`, `∞` when unconstrained.
+    fn certified_height(&self, inset: &[DVec3; 3], epsilon: f64) -> f64 {
+        let lowest = inset.iter().map(|x| self.u.dot(*x) - self.reach).fold(f64::INFINITY, f64::min) - 4.0 * epsilon;
+        if self.k <= 1e-12 {
+            // u = s n: the whole of T' is on the far side (up to rounding), for every height.
+            return if lowest >= -8.0 * epsilon { f64::INFINITY } else { 0.0 };
+        }
+        if lowest < 0.0 {
+            return 0.0;
+        }
+        lowest / self.k
+    }
+}

@@ -34,8 +34,12 @@ float fresnel_conductor(float cos_i, float eta, float k) {
     double e = double(eta), kk = double(k);
     double t = e * e - kk * kk - sin2;
     double a2b2 = std::sqrt(t * t + 4.0 * e * e * kk * kk);
+    // a2b2 >= |t| exactly; its rounded square root may fall an ulp short (k = 0, t < 0).
     double a = std::sqrt(std::max(0.0, 0.5 * (a2b2 + t)));
     double s1 = a2b2 + c2, s2 = 2.0 * a * c;
+    // 0/0 only for eta = 1, k = 0 at grazing incidence: an index-matched interface, which
+    // reflects nothing at every other angle.
+    if (s1 + s2 == 0.0) return 0.0f;
     double rs = (s1 - s2) / (s1 + s2);
     double p1 = c2 * a2b2 + sin2 * sin2, p2 = s2 * sin2;
     double rp = rs * (p1 - p2) / (p1 + p2);

@@ -44,8 +44,8 @@ pub struct Enclosure {
 }
 
 /// The enclosure of `f < level` with cells of about `cell` (0: 1/128 of the surface's largest
-/// extent, or [`1/LEVEL_CELLS`](LEVEL_CELLS) of a larger level). The surface must have a finite
-/// bounding box.
+/// extent, or 1/8 of a larger level: `LEVEL_CELLS`). The surface must have a finite bounding
+/// box.
 pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<Enclosure> {
     let invalid = |m: String| Error::new(ErrorKind::InvalidArgument, m);
     if !level.is_finite() {

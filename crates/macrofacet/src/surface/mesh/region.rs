@@ -63,11 +63,12 @@ impl FaceRegion {
     /// The certified regions of every triangle (in the hierarchy's order); `epsilon` is the
     /// rounding scale of the coordinates, taken off every certified height.
     pub fn build(bvh: &Bvh, triangles: &[Triangle], epsilon: f64) -> Vec<FaceRegion> {
-        let mut near = Vec::new();
-        (0..triangles.len()).map(|i| Self::of(bvh, triangles, i, epsilon, &mut near)).collect()
+        let (mut near, mut by_gap) = (Vec::new(), Vec::new());
+        (0..triangles.len()).map(|i| Self::of(bvh, triangles, i, epsilon, &mut near, &mut by_gap)).collect()
     }
 
-    fn of(bvh: &Bvh, triangles: &[Triangle], i: usize, epsilon: f64, near: &mut Vec<u32>) -> FaceRegion {
+    /// `near` and `by_gap`: scratch space, reused from triangle to triangle.
+    fn of(bvh: &Bvh, triangles: &[Triangle], i: usize, epsilon: f64, near: &mut Vec<u32>, by_gap: &mut Vec<(f64, u32)>) -> FaceRegion {
         let t = &triangles[i];
         let n = t.n;
         if n == DVec3::ZERO {
@@ -101,9 +102,10 @@ impl FaceRegion {
             (t.centre - o.centre).length() - t.radius - o.radius
         };
         // (Each gap computed once, not at every comparison; the sort is stable, as before.)
-        let mut by_gap: Vec<(f64, u32)> = near.iter().map(|&j| (gap(j), j)).collect();
+        by_gap.clear();
+        by_gap.extend(near.iter().map(|&j| (gap(j), j)));
         by_gap.sort_by(|a, b| a.0.total_cmp(&b.0));
-        for &(gap_j, j) in &by_gap {
+        for &(gap_j, j) in by_gap.iter() {
             if j as usize == i {
                 continue;
             }

@@ -13,6 +13,7 @@ use macrofacet::frame::Frame;
 use macrofacet::surface::SurfacePoint;
 use macrofacet::{MacrofacetMedium, PHASE_SAMPLE_DIMENSIONS};
 use glam::{DMat3, DVec3};
+use std::borrow::Cow;
 use std::ffi::c_void;
 
 /// [`mf_local_params::set`] / [`mf_param_bounds::set`]: `sigma` is given.
@@ -225,13 +226,15 @@ pub unsafe extern "C" fn mf_field_free(field: *mut mf_field) {
 }
 
 /// The medium at an event with local parameters (NULL: the medium's own).
-fn localized(m: &MacrofacetMedium, local: *const mf_local_params, frame: &Frame) -> FfiResult<MacrofacetMedium> {
+/// The medium itself without local parameters (no copy: it is a few hundred bytes, and the phase
+/// calls of a stationary medium are its hot path).
+fn localized<'m>(m: &'m MacrofacetMedium, local: *const mf_local_params, frame: &Frame) -> FfiResult<Cow<'m, MacrofacetMedium>> {
     if local.is_null() {
-        return Ok(*m);
+        return Ok(Cow::Borrowed(m));
     }
     // SAFETY: non-NULL, and the caller promises a valid mf_local_params.
     let local = LocalParams::try_from(unsafe { &*local })?;
-    Ok(m.localized(&local, frame)?)
+    Ok(Cow::Owned(m.localized(&local, frame)?))
 }
 
 /// [`super::medium::mf_phase_sample`] at an event whose local parameters are `*local` (as a

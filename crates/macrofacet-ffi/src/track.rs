@@ -117,10 +117,11 @@ impl SurfaceVisitor for Call<'_> {
     type Output = macrofacet::error::Result<Outcome>;
     fn visit<S: MeanSurface>(self, surface: &S) -> Self::Output {
         match self.field {
-            None => self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &Constant)),
+            // The collision reports no uv: the tracker need not complete it.
+            None => self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv()),
             Some(field) => {
                 let field = CallbackField::new(field, self.user_data);
-                self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &field))
+                self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv())
             }
         }
     }

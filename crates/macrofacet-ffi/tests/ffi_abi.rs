@@ -456,7 +456,7 @@ unsafe extern "C" fn plane_point(_: *mut std::ffi::c_void, p: mf_vec3, out: *mut
 fn tracking_calls_equal_the_core_bit_for_bit() {
     use macrofacet::rng::Pcg32;
     use macrofacet::surface::{MeanSurface, Sphere, TriangleMesh};
-    use macrofacet::tracking::{TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
+    use macrofacet::tracking::{ProjectedAreaBounds, TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
 
     // An octahedron with vertex normals.
     let positions: Vec<f64> = vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0];
@@ -482,7 +482,9 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
     let octahedron = TriangleMesh::new(&points, &tris, Some(&points), None).unwrap();
 
     fn compare<S: MeanSurface>(name: &str, handle: *const mf_surface, medium: *const mf_medium, core: &MacrofacetMedium, surface: &S, rng: &mut Rng) {
-        let tracker = Tracker::new(core, surface);
+        // The medium's handle holds its bounds built once, with their cells.
+        let bounds = ProjectedAreaBounds::of(core);
+        let tracker = Tracker::with_bounds(core, &bounds, surface, &macrofacet::field::Constant);
         let mut queries = Vec::new();
         for i in 0..300u64 {
             // Rays from around the shell towards the surface, some leaving it, some unbounded.

@@ -121,13 +121,22 @@ impl MacrofacetPhase {
         }
     }
 
-    /// [`Self::eval`] and [`Self::pdf`] together: for diffuse flakes both are the same
-    /// quadrature, computed once (Mitsuba 3's `eval_pdf`).
+    /// [`Self::eval`] and [`Self::pdf`] together (Mitsuba 3's `eval_pdf`): for diffuse flakes both
+    /// are the same quadrature, for specular flakes sampled exactly the same `D(m) / (4 σ(wi))`;
+    /// each computed once.
     pub fn eval_pdf(&self, wi: DVec3, wo: DVec3) -> (Rgb, f64) {
         match self.micro_bsdf {
             MicroBsdf::Diffuse { reflectance } => {
                 let p = self.diffuse_lobe_integral(wi, wo);
                 (reflectance.map(|r| r * p), p)
+            }
+            // Exact sampling with the trait's sampling area (the projected area): both are
+            // `F D(m) / (4 σ(wi))` and `D(m) / (4 σ(wi))`, one half vector, `D` and area for the
+            // two, bit for bit those of `eval` and `pdf`.
+            _ if self.sampling == VndfSampling::Exact && matches!(self.ndf, Ndf::Beckmann(_) | Ndf::Ggx(_) | Ndf::Gpss(_) | Ndf::GpssMatrix(_)) => {
+                let (Some(area), Some((m, cos))) = (self.ndf.visible_area(wi), half_vector(wi, wo)) else { return ([0.0; 3], 0.0) };
+                let p = self.ndf.d(m) / (4.0 * area);
+                (self.micro_bsdf.specular(cos).unwrap_or([0.0; 3]).map(|x| x * p), p)
             }
             _ => (self.eval(wi, wo), self.pdf(wi, wo)),
         }

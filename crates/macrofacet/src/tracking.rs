@@ -36,7 +36,8 @@ use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
 use glam::DVec3;
 
 /// The PCG32 stream ("mftrack") of the C ABI's tracking calls: `mf_track_*` with `seed` equals
-/// [`Tracker`] with `Pcg32::new(seed, TRACK_STREAM)`.
+/// [`Tracker::with_bounds`] (with [`ProjectedAreaBounds::of`] the medium, built with its handle)
+/// with `Pcg32::new(seed, TRACK_STREAM)`.
 pub const TRACK_STREAM: u64 = 0x6d66_7472_6163_6b;
 
 /// Counts of one tracking call, for tests and benchmarks.
@@ -66,7 +67,8 @@ impl TrackStats {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TrackedFlight {
     /// A real collision at distance `t`, where the surface is `point` (its frame is the local
-    /// frame of the phase function there; its normal unit).
+    /// frame of the phase function there; its normal unit; its uv completed unless the tracker
+    /// was built [`Tracker::without_uv`]).
     Scatter { t: f64, point: SurfacePoint, local: LocalParams },
     /// No collision in `[0, t_max]`.
     Pass,
@@ -128,39 +130,125 @@ const VIOLATION_SLACK: f64 = 1e-9;
 /// Upper and lower bounds of `σ(d_local)` over frames with a given range of `d·n`: what a
 /// tracker derives from its medium's distribution before any segment (two envelope
 /// distributions and a Lipschitz constant, a few hundred instructions and a kilobyte). A host that
-/// tracks many rays through one medium builds them once ([`Tracker::with_bounds`]).
-#[derive(Clone, Copy, Debug)]
+/// tracks many rays through one medium builds them once ([`Self::of`], [`Tracker::with_bounds`]):
+/// they then also hold both bounds over [`AREA_CELLS`] cells of `d·n`, which answer the narrow
+/// ranges of most segments without evaluating a projected area.
+#[derive(Clone, Debug)]
 pub struct ProjectedAreaBounds {
     upper: Ndf,
     lower: Ndf,
     lipschitz: f64,
     /// The distribution they bound.
     source: Ndf,
+    /// Cell `k` holds the bounds over `d·n ∈ [−1 + k h − η, −1 + (k + 1) h + η]`, `h = 2 /`
+    /// [`AREA_CELLS`], `η` = [`CELL_OVERLAP`] (none for per-call bounds).
+    cells: Option<Box<[AreaCell]>>,
+}
+
+/// Cells of `d·n ∈ [−1, 1]` in [`ProjectedAreaBounds::of`] (16 bytes each).
+pub const AREA_CELLS: usize = 1024;
+/// The most cells a range may span to be answered from them (a thin shell's segment across
+/// the unit sphere spans up to ~10, a loop of loads; wider ranges are rarer and get the exact
+/// bound, two evaluations).
+const CELL_SPAN: usize = 32;
+/// How far each cell reaches into its neighbours: covers the rounding of a cosine's cell index
+/// (a few ulps of `(c + 1) AREA_CELLS / 2`, 1e-16 in `c`).
+const CELL_OVERLAP: f64 = 1e-12;
+/// A cell answers only where its bound is within this factor of the exact one over any part of
+/// it (its bound over the inner bound of the same envelope): a looser majorant costs tentative
+/// collisions (each ~0.8k instructions, ~0.5 per thin-shell segment) against the ~0.3k of an
+/// exact bound. Elsewhere (a narrow lobe's grazing tail, anisotropic envelopes) the exact bound.
+const CELL_LOOSENESS: f64 = 1.1;
+
+/// The bounds of one cell of `d·n` ([`ProjectedAreaBounds`]): `S_up` over the cell where it is
+/// within [`CELL_LOOSENESS`] of the upper envelope's smallest area there, else `+∞`; `S_lo`
+/// where the lower envelope's largest area is within that factor of it, else `−∞` (so that the
+/// largest and smallest over a range of cells say at once whether every cell answers).
+#[derive(Clone, Copy, Debug)]
+struct AreaCell {
+    upper: f64,
+    lower: f64,
 }
 
 impl ProjectedAreaBounds {
-    /// The bounds of a medium's distribution.
+    /// The bounds of a medium's distribution, with their cells (2 × [`AREA_CELLS`] bounds at
+    /// build: for hosts that build them once per medium).
     pub fn of(medium: &MacrofacetMedium) -> Self {
-        Self::new(&medium.phase.ndf)
+        Self::with_cells(&medium.phase.ndf)
     }
 
+    fn with_cells(ndf: &Ndf) -> Self {
+        let mut bounds = Self::new(ndf);
+        let h = 2.0 / AREA_CELLS as f64;
+        let cells = (0..AREA_CELLS)
+            .map(|k| {
+                let cell = [-1.0 + k as f64 * h - CELL_OVERLAP, -1.0 + (k + 1) as f64 * h + CELL_OVERLAP];
+                let (upper, lower) = (bounds.upper_exact(cell), bounds.lower_exact(cell));
+                let upper_floor = bounds.bound(&bounds.upper, cell, Side::Lower) * (1.0 - AREA_ROUNDING);
+                let lower_ceiling = bounds.bound(&bounds.lower, cell, Side::Upper) * (1.0 + AREA_ROUNDING);
+                // (Both zero in a lobe's far tail: tight.)
+                AreaCell {
+                    upper: if upper <= CELL_LOOSENESS * upper_floor { upper } else { f64::INFINITY },
+                    lower: if lower_ceiling <= CELL_LOOSENESS * lower { lower } else { f64::NEG_INFINITY },
+                }
+            })
+            .collect();
+        bounds.cells = Some(cells);
+        bounds
+    }
+
+    /// Without cells: for bounds built per call or per segment.
     fn new(ndf: &Ndf) -> Self {
         let (upper, lower) = ndf.isotropic_envelope();
-        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf }
+        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf, cells: None }
     }
 
-    /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent.
+    /// The cells' bound of `side` over `cos` when `cos` lies within at most [`CELL_SPAN`] cells,
+    /// all tight. A range within cells `k0..=k1` lies within their union, so the largest
+    /// (smallest) of their bounds holds over it; and it is within [`CELL_LOOSENESS`] of the exact
+    /// bound, which is at least (at most) each cell's smallest (largest) area, as the range
+    /// meets every cell.
+    fn from_cells(&self, cos: [f64; 2], side: Side) -> Option<f64> {
+        let cells = self.cells.as_deref()?;
+        if !(cos[0] >= -1.0 && cos[1] <= 1.0) {
+            return None;
+        }
+        let index = |c: f64| (((c + 1.0) * (0.5 * AREA_CELLS as f64)) as usize).min(AREA_CELLS - 1);
+        let (k0, k1) = (index(cos[0]), index(cos[1]));
+        if k1 >= k0 + CELL_SPAN {
+            return None;
+        }
+        let span = &cells[k0..=k1];
+        let bound = match side {
+            Side::Upper => span.iter().fold(0.0, |m, c| c.upper.max(m)),
+            Side::Lower => span.iter().fold(f64::INFINITY, |m, c| c.lower.min(m)),
+        };
+        bound.is_finite().then_some(bound)
+    }
+
+    /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent:
+    /// from the cells where they answer, else [`Self::upper_exact`].
+    fn upper(&self, cos: [f64; 2]) -> f64 {
+        self.from_cells(cos, Side::Upper).unwrap_or_else(|| self.upper_exact(cos))
+    }
+
+    /// `S_up` from the distribution.
     /// `σ(d) = projected_area(−d_local)` sees `w_z = −d·n`. Where a closed form is monotone
     /// ([`Ndf::projected_area_bound`]: isotropic gpss, Beckmann, GGX up to α = 1) the range's
     /// extremes give it exactly; otherwise, over the angle interval, an L-Lipschitz function
     /// exceeds neither the larger end value by more than `L × width / 2` nor the midpoint value
     /// by more than that (one evaluation for narrow ranges).
-    fn upper(&self, cos: [f64; 2]) -> f64 {
+    fn upper_exact(&self, cos: [f64; 2]) -> f64 {
         self.bound(&self.upper, cos, Side::Upper) * (1.0 + AREA_ROUNDING)
     }
 
-    /// `S_lo <= σ(d_local)` over the same frames (at least 0).
+    /// `S_lo <= σ(d_local)` over the same frames (at least 0): from the cells where they answer.
     fn lower(&self, cos: [f64; 2]) -> f64 {
+        self.from_cells(cos, Side::Lower).unwrap_or_else(|| self.lower_exact(cos))
+    }
+
+    /// `S_lo` from the distribution.
+    fn lower_exact(&self, cos: [f64; 2]) -> f64 {
         (self.bound(&self.lower, cos, Side::Lower) * (1.0 - AREA_ROUNDING)).max(0.0)
     }
 
@@ -236,6 +324,8 @@ pub struct Tracker<'a, S: MeanSurface, F: MediumField = Constant> {
     isotropic: bool,
     /// The heights of the whole region: the medium's, or the field's largest `σ`.
     region: HeightProfile,
+    /// Whether a collision's uv is completed ([`Self::without_uv`]).
+    complete_uv: bool,
 }
 
 /// A tracker's projected-area bounds: the host's, or its own (boxed: a tracker is built per
@@ -291,20 +381,27 @@ impl<'a, S: MeanSurface> Tracker<'a, S> {
 impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// A medium whose parameters `field` gives per point (`σ_max` must bound its `σ`).
     pub fn with_field(medium: &'a MacrofacetMedium, surface: &'a S, field: &'a F) -> Self {
-        Self::assemble(medium, Area::Owned(Box::new(ProjectedAreaBounds::of(medium))), surface, field)
+        Self::assemble(medium, Area::Owned(Box::new(ProjectedAreaBounds::new(&medium.phase.ndf))), surface, field)
     }
 
     /// [`Self::with_field`] with the medium's bounds built beforehand
     /// ([`ProjectedAreaBounds::of`]`(medium)`; bounds of another distribution are not used, the
     /// tracker builds its own).
     pub fn with_bounds(medium: &'a MacrofacetMedium, bounds: &'a ProjectedAreaBounds, surface: &'a S, field: &'a F) -> Self {
-        let area = if bounds.source == medium.phase.ndf { Area::Borrowed(bounds) } else { Area::Owned(Box::new(ProjectedAreaBounds::of(medium))) };
+        let area = if bounds.source == medium.phase.ndf { Area::Borrowed(bounds) } else { Area::Owned(Box::new(ProjectedAreaBounds::new(&medium.phase.ndf))) };
         Self::assemble(medium, area, surface, field)
     }
 
     fn assemble(medium: &'a MacrofacetMedium, area: Area<'a>, surface: &'a S, field: &'a F) -> Self {
         let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
-        Tracker { medium, surface, field, area, isotropic: medium.phase.ndf.is_isotropic(), region }
+        Tracker { medium, surface, field, area, isotropic: medium.phase.ndf.is_isotropic(), region, complete_uv: true }
+    }
+
+    /// A tracker whose collisions keep the uv the tracker's queries gave (possibly none) instead
+    /// of completing it ([`MeanSurface::uv`]): for callers that do not read it, such as the C
+    /// ABI, whose collisions carry no uv (a sphere's costs an `atan2` and an `acos`).
+    pub fn without_uv(self) -> Self {
+        Tracker { complete_uv: false, ..self }
     }
 
     fn height(&self) -> &HeightProfile {
@@ -690,7 +787,8 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     // A host's normal is taken within 1e-4 of unit length; the collision's
                     // frame is unit (found by fuzzing: length 1.00005 came back). Its uv is
                     // completed where the tracker's queries left it out (MeanSurface::uv).
-                    let point = SurfacePoint { normal: point.normal.normalize(), uv: self.surface.uv(p, &point), ..point };
+                    let uv = if self.complete_uv { self.surface.uv(p, &point) } else { point.uv };
+                    let point = SurfacePoint { normal: point.normal.normalize(), uv, ..point };
                     return Ok(TrackedFlight::Scatter { t: seg.t + s, point, local });
                 }
                 // (A tentative collision at the segment's start would not advance the ray.)
@@ -849,4 +947,55 @@ fn spend_tentative(budget: &mut u64, origin: DVec3, d: DVec3) -> Result<()> {
 /// The error of a call that took [`MAX_SEGMENTS`] segments.
 fn too_many_segments() -> Error {
     Error::new(ErrorKind::InvalidArgument, format!("tracking did not end after {MAX_SEGMENTS} segments (the mean surface's bounds are degenerate)"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ndf::{Beckmann, Ggx, Gpss};
+
+    /// The cells' bounds hold over every range of `d·n` they answer (against the projected area
+    /// sampled across the range, any azimuth) and stay within [`CELL_LOOSENESS`] of the
+    /// distribution's own bounds; they answer most narrow ranges of smooth lobes.
+    #[test]
+    fn cells_bound_the_projected_area_within_their_looseness() {
+        let ndfs = [
+            Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()),
+            Ndf::Beckmann(Beckmann::new(0.05, 0.05).unwrap()),
+            Ndf::Beckmann(Beckmann::new(0.1, 0.4).unwrap()),
+            Ndf::Ggx(Ggx::new(0.2, 0.2).unwrap()),
+            Ndf::Gpss(Gpss::new(0.4, 0.4, 0.4).unwrap()),
+            Ndf::Gpss(Gpss::new(0.02, 0.02, 0.5).unwrap()),
+        ];
+        let mut rng = Pcg32::new(7, 3);
+        for ndf in ndfs {
+            let bounds = ProjectedAreaBounds::with_cells(&ndf);
+            let area = |c: f64, phi: f64| {
+                let s = (1.0 - c * c).max(0.0).sqrt();
+                ndf.projected_area(DVec3::new(s * phi.cos(), s * phi.sin(), -c))
+            };
+            let (mut answered, mut narrow) = (0, 0);
+            for _ in 0..4000 {
+                let (c, width) = (2.0 * rng.next_f64() - 1.0, 10f64.powf(-6.0 + 5.0 * rng.next_f64()));
+                let cos = [(c - width).max(-1.0), (c + width).min(1.0)];
+                narrow += usize::from(width < 1e-2);
+                let points: Vec<f64> = (0..=16).map(|i| area(cos[0] + (cos[1] - cos[0]) * i as f64 / 16.0, std::f64::consts::TAU * rng.next_f64())).collect();
+                let (largest, smallest) = points.iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &a| (hi.max(a), lo.min(a)));
+                if let Some(upper) = bounds.from_cells(cos, Side::Upper) {
+                    answered += usize::from(width < 1e-2);
+                    assert!(upper >= largest, "{ndf:?} over {cos:?}: cells' S_up {upper} below the area {largest}");
+                    let exact = bounds.upper_exact(cos);
+                    assert!(upper <= CELL_LOOSENESS * exact * (1.0 + 1e-12), "{ndf:?} over {cos:?}: cells' S_up {upper} against {exact}");
+                }
+                if let Some(lower) = bounds.from_cells(cos, Side::Lower) {
+                    assert!(lower <= smallest, "{ndf:?} over {cos:?}: cells' S_lo {lower} above the area {smallest}");
+                    let exact = bounds.lower_exact(cos);
+                    assert!(CELL_LOOSENESS * lower >= exact * (1.0 - 1e-12), "{ndf:?} over {cos:?}: cells' S_lo {lower} against {exact}");
+                }
+            }
+            if matches!(ndf, Ndf::Beckmann(b) if b.alpha_u == 0.3) || matches!(ndf, Ndf::Gpss(g) if g.alpha_z == 0.4) {
+                assert!(answered * 10 > narrow * 7, "{ndf:?}: the cells answered {answered} of {narrow} narrow ranges");
+            }
+        }
+    }
 }

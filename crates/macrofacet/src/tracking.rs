@@ -116,11 +116,20 @@ const POSITION_ROUNDING: f64 = 4.0 * f64::EPSILON;
 /// Lipschitz steps above the shell per segment (each one surface query).
 const MAX_SKIPS: u32 = 64;
 /// Default reach of a segment, in σ of change of `f` (covers the shell from its top to deep
-/// below the mean surface, where a collision is nearly certain).
-const SEGMENT_SIGMAS: f64 = 4.0;
+/// below the mean surface, where a collision is nearly certain: from the top face of a `k = 3`
+/// shell down to `f = −3σ` a normally incident ray passes with probability `Φ(−3)/Φ(3)`, 1e-3,
+/// against 0.16 at 4σ, which made one flight in five bound a second segment). Against 4σ,
+/// 6σ rendered with 5.5 % fewer instructions the thin sphere anchor, 1.9 % the torus anchor,
+/// 1.6 % the fuzzy sphere of bench/gpis_compare.xml and 0.5 % the default scene (5σ: 4.1, 1.8
+/// and 1.6 %; 7σ: 5.7, 1.5 and 1.7 %).
+const SEGMENT_SIGMAS: f64 = 6.0;
 /// Above `top + SKIP_SIGMAS σ` the tracker steps by the Lipschitz bound instead of bounding a
-/// segment: cheaper for surfaces whose bounds cost more than a point query.
-const SKIP_SIGMAS: f64 = 2.0;
+/// segment: cheaper for surfaces whose bounds cost more than a point query. Against 2σ, 0.5σ
+/// rendered the torus anchor with 3.6 % fewer instructions and the default scene with 2.9 %
+/// fewer (1σ: 2.6 % on the torus, 0.25σ: 3.8 %; at 0 the steps of `f − top` toward the top
+/// face shrink geometrically on grazing rays, +49 %). Surfaces with exact clearances skip to
+/// the top face itself.
+const SKIP_SIGMAS: f64 = 0.5;
 /// Ratio tracking: below this estimate, continue by Russian roulette (unbiased; ends walks into
 /// the opaque interior).
 const ROULETTE_THRESHOLD: f64 = 0.1;

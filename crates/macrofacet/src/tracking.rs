@@ -138,10 +138,11 @@ const VIOLATION_SLACK: f64 = 1e-9;
 
 /// Upper and lower bounds of `σ(d_local)` over frames with a given range of `d·n`: what a
 /// tracker derives from its medium's distribution before any segment (two envelope
-/// distributions and a Lipschitz constant, a few hundred instructions and a kilobyte). A host that
-/// tracks many rays through one medium builds them once ([`Self::of`], [`Tracker::with_bounds`]):
-/// they then also hold both bounds over [`AREA_CELLS`] cells of `d·n`, which answer the narrow
-/// ranges of most segments without evaluating a projected area.
+/// distributions and a Lipschitz constant, a few hundred instructions and a kilobyte, built per
+/// call by [`Tracker::new`]). A host that tracks many rays through one medium builds them once
+/// ([`Self::of`], [`Tracker::with_bounds`]): they then also hold both bounds over [`AREA_CELLS`]
+/// cells of `d·n`, which answer the narrow ranges of most segments without evaluating a
+/// projected area.
 #[derive(Clone, Debug)]
 pub struct ProjectedAreaBounds {
     upper: Ndf,
@@ -180,8 +181,9 @@ struct AreaCell {
 }
 
 impl ProjectedAreaBounds {
-    /// The bounds of a medium's distribution, with their cells (2 × [`AREA_CELLS`] bounds at
-    /// build: for hosts that build them once per medium).
+    /// The bounds of a medium's distribution, with their cells: 4 × [`AREA_CELLS`] area bounds at
+    /// build (each cell's two bounds and the two extremes that say whether it answers) and 16 KB:
+    /// for hosts that build them once per medium.
     pub fn of(medium: &MacrofacetMedium) -> Self {
         Self::with_cells(&medium.phase.ndf)
     }

@@ -225,9 +225,8 @@ pub unsafe extern "C" fn mf_field_free(field: *mut mf_field) {
     free_handle(field);
 }
 
-/// The medium at an event with local parameters (NULL: the medium's own).
-/// The medium itself without local parameters (no copy: it is a few hundred bytes, and the phase
-/// calls of a stationary medium are its hot path).
+/// The medium at an event with local parameters; without them (NULL) the medium itself, borrowed
+/// (it is 736 bytes, and the phase calls of a stationary medium are their hot path).
 fn localized<'m>(m: &'m MacrofacetMedium, local: *const mf_local_params, frame: &Frame) -> FfiResult<Cow<'m, MacrofacetMedium>> {
     if local.is_null() {
         return Ok(Cow::Borrowed(m));

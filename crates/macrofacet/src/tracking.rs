@@ -226,7 +226,8 @@ impl ProjectedAreaBounds {
         }
         let index = |c: f64| (((c + 1.0) * (0.5 * AREA_CELLS as f64)) as usize).min(AREA_CELLS - 1);
         let (k0, k1) = (index(cos[0]), index(cos[1]));
-        if k1 >= k0 + CELL_SPAN {
+        // (An unordered range, which validated bounds never give, takes the exact bound too.)
+        if k1 < k0 || k1 >= k0 + CELL_SPAN {
             return None;
         }
         let span = &cells[k0..=k1];

@@ -112,13 +112,17 @@ impl MacrofacetPhase {
                 let p = self.diffuse_lobe_integral(wi, wo);
                 reflectance.map(|r| r * p)
             }
-            _ => {
-                let (Some(area), Some((m, cos))) = (self.ndf.visible_area(wi), half_vector(wi, wo)) else { return [0.0; 3] };
-                let f = self.micro_bsdf.specular(cos).unwrap_or([0.0; 3]);
-                let p = self.ndf.d(m) / (4.0 * area);
-                f.map(|x| x * p)
-            }
+            _ => self.specular_lobe(wi, wo).0,
         }
+    }
+
+    /// A specular flake's `p(wi, wo) = F D(m) / (4 σ(wi))` per channel, with `D(m) / (4 σ(wi))`
+    /// (the density of exact visible-normal sampling); zero where `wi` sees no flake or the
+    /// directions are back to back.
+    fn specular_lobe(&self, wi: DVec3, wo: DVec3) -> (Rgb, f64) {
+        let (Some(area), Some((m, cos))) = (self.ndf.visible_area(wi), half_vector(wi, wo)) else { return ([0.0; 3], 0.0) };
+        let p = self.ndf.d(m) / (4.0 * area);
+        (self.micro_bsdf.specular(cos).unwrap_or([0.0; 3]).map(|x| x * p), p)
     }
 
     /// [`Self::eval`] and [`Self::pdf`] together (Mitsuba 3's `eval_pdf`): for diffuse flakes both
@@ -130,14 +134,9 @@ impl MacrofacetPhase {
                 let p = self.diffuse_lobe_integral(wi, wo);
                 (reflectance.map(|r| r * p), p)
             }
-            // Exact sampling with the trait's sampling area (the projected area): both are
-            // `F D(m) / (4 σ(wi))` and `D(m) / (4 σ(wi))`, one half vector, `D` and area for the
-            // two, bit for bit those of `eval` and `pdf`.
-            _ if self.sampling == VndfSampling::Exact && matches!(self.ndf, Ndf::Beckmann(_) | Ndf::Ggx(_) | Ndf::Gpss(_) | Ndf::GpssMatrix(_)) => {
-                let (Some(area), Some((m, cos))) = (self.ndf.visible_area(wi), half_vector(wi, wo)) else { return ([0.0; 3], 0.0) };
-                let p = self.ndf.d(m) / (4.0 * area);
-                (self.micro_bsdf.specular(cos).unwrap_or([0.0; 3]).map(|x| x * p), p)
-            }
+            // Exact sampling with the trait's sampling area (the projected area): the lobe's
+            // density is the pdf, bit for bit that of `pdf`.
+            _ if self.sampling == VndfSampling::Exact && matches!(self.ndf, Ndf::Beckmann(_) | Ndf::Ggx(_) | Ndf::Gpss(_) | Ndf::GpssMatrix(_)) => self.specular_lobe(wi, wo),
             _ => (self.eval(wi, wo), self.pdf(wi, wo)),
         }
     }

@@ -148,13 +148,14 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
         }
     };
     let (pdf_c, cdf_minus_c) = (normal_pdf(c), normal_cdf(-c));
-    let tail = |x: f64| -> f64 {
+    // The tail at x from `e = gauss(x)`, which the step needs too (one exponential per step).
+    let tail = |x: f64, e: f64| -> f64 {
         if lower_tail {
-            pdf_c - normal_pdf(x) + c * (normal_cdf(x) - cdf_minus_c)
+            pdf_c - e + c * (normal_cdf(x) - cdf_minus_c)
         } else if c >= 0.0 {
-            normal_pdf(x) + c * normal_cdf(-x)
+            e + c * normal_cdf(-x)
         } else {
-            survival_scaled(c, x)
+            e * (1.0 + c * mills_ratio(x))
         }
     };
     let z = if c >= 0.0 { pdf_c + c * normal_cdf(c) } else { survival_scaled(c, -c) };
@@ -166,7 +167,8 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
     let mut hi = (-c).max(0.0) + 40.0;
     let mut x = initial_guess(c, u).clamp(lo, hi);
     for _ in 0..60 {
-        let t = tail(x);
+        let e = gauss(x);
+        let t = tail(x, e);
         let h = sign * (t.ln() - ln_target);
         if h.is_nan() {
             x = 0.5 * (lo + hi);
@@ -179,7 +181,6 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
         } else {
             return x;
         }
-        let e = gauss(x);
         let slope = (x + c) * e / t;
         let curvature = e * (1.0 - x * (x + c)) / t - sign * slope * slope;
         // Halley's step (cubic convergence), falling back to Newton's where its correction is
@@ -207,8 +208,12 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
 
 /// `S(x) / φ(c)` for `c < 0`, `x >= -c`: `e^{-(x² - c²)/2} [1 − |c| M(x)]`.
 fn survival_scaled(c: f64, x: f64) -> f64 {
-    let mills = (PI / 2.0).sqrt() * erfcx(x * FRAC_1_SQRT_2);
-    (-(x - c) * (x + c) * 0.5).exp() * (1.0 + c * mills)
+    (-(x - c) * (x + c) * 0.5).exp() * (1.0 + c * mills_ratio(x))
+}
+
+/// The Mills ratio `M(x) = Φ(−x)/φ(x) = sqrt(π/2) erfcx(x/√2)`.
+fn mills_ratio(x: f64) -> f64 {
+    (PI / 2.0).sqrt() * erfcx(x * FRAC_1_SQRT_2)
 }
 
 /// A starting point near the quantile: for very negative `c`, `x + c` tends to a Gamma(2, |c|)

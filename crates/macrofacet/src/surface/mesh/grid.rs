@@ -145,7 +145,10 @@ impl CellGrid {
     }
 
     fn cell_of(&self, p: DVec3) -> Option<IVec3> {
-        let c = ((p - self.origin) / self.h).floor();
+        // Truncation, once inside: the floor there, without `floor` (a library call on baseline
+        // x86-64, 0.8 % of a mesh shell's rendering). `c >= 0` and `c < dims` are those of the
+        // floor, the dims being whole; NaN fails both.
+        let c = (p - self.origin) / self.h;
         (c.cmpge(DVec3::ZERO).all() && c.cmplt(self.dims.as_dvec3()).all()).then(|| c.as_ivec3())
     }
 

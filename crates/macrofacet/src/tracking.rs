@@ -141,8 +141,8 @@ const VIOLATION_SLACK: f64 = 1e-9;
 /// distributions and a Lipschitz constant, a few hundred instructions and a kilobyte, built per
 /// call by [`Tracker::new`]). A host that tracks many rays through one medium builds them once
 /// ([`Self::of`], [`Tracker::with_bounds`]): they then also hold both bounds over [`AREA_CELLS`]
-/// cells of `d·n`, which answer the narrow ranges of most segments without evaluating a
-/// projected area.
+/// cells of `d·n`, which answer the ranges of most segments without evaluating a projected
+/// area.
 #[derive(Clone, Debug)]
 pub struct ProjectedAreaBounds {
     upper: Ndf,
@@ -151,16 +151,19 @@ pub struct ProjectedAreaBounds {
     /// The distribution they bound.
     source: Ndf,
     /// Cell `k` holds the bounds over `d·n ∈ [−1 + k h − η, −1 + (k + 1) h + η]`, `h = 2 /`
-    /// [`AREA_CELLS`], `η` = [`CELL_OVERLAP`] (none for per-call bounds).
-    cells: Option<Box<[AreaCell]>>,
+    /// [`AREA_CELLS`], `η` = [`CELL_OVERLAP`] (none for per-call bounds): level 0 of a sparse
+    /// table whose level `j` holds, at `k`, the extremes of cells `k..k + 2^j` (where they exist),
+    /// so that any range of cells is the union of two entries of one level.
+    cells: Option<Box<[[AreaCell; AREA_CELLS]]>>,
 }
 
 /// Cells of `d·n ∈ [−1, 1]` in [`ProjectedAreaBounds::of`] (16 bytes each).
 pub const AREA_CELLS: usize = 1024;
-/// The most cells a range may span to be answered from them (a thin shell's segment across
-/// the unit sphere spans up to ~10, a loop of loads; wider ranges are rarer and get the exact
-/// bound, two evaluations).
-const CELL_SPAN: usize = 32;
+/// Levels of the cells' sparse table: spans of `1, 2, 4, …, AREA_CELLS` cells. Any range then
+/// costs two loads: a thin shell's segment across the unit sphere spans up to ~10 cells, the
+/// fuzzy sphere's of bench/gpis_compare.xml (σ = 0.02) ~100, which a scan of at most 32 cells
+/// left to the exact bound (two evaluations of the projected area, ~4 % of its rendering).
+const CELL_LEVELS: usize = AREA_CELLS.trailing_zeros() as usize + 1;
 /// How far each cell reaches into its neighbours: covers the rounding of a cosine's cell index
 /// (a few ulps of `(c + 1) AREA_CELLS / 2`, 1e-16 in `c`).
 const CELL_OVERLAP: f64 = 1e-12;
@@ -182,8 +185,8 @@ struct AreaCell {
 
 impl ProjectedAreaBounds {
     /// The bounds of a medium's distribution, with their cells: 4 × [`AREA_CELLS`] area bounds at
-    /// build (each cell's two bounds and the two extremes that say whether it answers) and 16 KB:
-    /// for hosts that build them once per medium.
+    /// build (each cell's two bounds and the two extremes that say whether it answers) and 176 KB
+    /// with the sparse table: for hosts that build them once per medium.
     pub fn of(medium: &MacrofacetMedium) -> Self {
         Self::with_cells(&medium.phase.ndf)
     }
@@ -191,7 +194,7 @@ impl ProjectedAreaBounds {
     fn with_cells(ndf: &Ndf) -> Self {
         let mut bounds = Self::new(ndf);
         let h = 2.0 / AREA_CELLS as f64;
-        let cells = (0..AREA_CELLS)
+        let cells: Vec<AreaCell> = (0..AREA_CELLS)
             .map(|k| {
                 let cell = [-1.0 + k as f64 * h - CELL_OVERLAP, -1.0 + (k + 1) as f64 * h + CELL_OVERLAP];
                 let (upper, lower) = (bounds.upper_exact(cell), bounds.lower_exact(cell));
@@ -204,7 +207,17 @@ impl ProjectedAreaBounds {
                 }
             })
             .collect();
-        bounds.cells = Some(cells);
+        let mut table = vec![[AreaCell { upper: f64::INFINITY, lower: f64::NEG_INFINITY }; AREA_CELLS]; CELL_LEVELS].into_boxed_slice();
+        table[0].copy_from_slice(&cells);
+        for j in 1..CELL_LEVELS {
+            let half = 1 << (j - 1);
+            for k in 0..AREA_CELLS {
+                // Past the last cell the entry is never read (a range ends at the last cell).
+                let (a, b) = (table[j - 1][k], table[j - 1][(k + half).min(AREA_CELLS - 1)]);
+                table[j][k] = AreaCell { upper: a.upper.max(b.upper), lower: a.lower.min(b.lower) };
+            }
+        }
+        bounds.cells = Some(table);
         bounds
     }
 
@@ -214,11 +227,12 @@ impl ProjectedAreaBounds {
         ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf, cells: None }
     }
 
-    /// The cells' bound of `side` over `cos` when `cos` lies within at most [`CELL_SPAN`] cells,
-    /// all tight. A range within cells `k0..=k1` lies within their union, so the largest
-    /// (smallest) of their bounds holds over it; and it is within [`CELL_LOOSENESS`] of the exact
-    /// bound, which is at least (at most) each cell's smallest (largest) area, as the range
-    /// meets every cell.
+    /// The cells' bound of `side` over `cos` when every cell it meets is tight. A range within
+    /// cells `k0..=k1` lies within their union, so the largest (smallest) of their bounds holds
+    /// over it; and it is within [`CELL_LOOSENESS`] of the exact bound, which is at least (at
+    /// most) each cell's smallest (largest) area, as the range meets every cell. The extremes
+    /// over `k0..=k1` are those of the two table entries of span `2^j <= k1 − k0 + 1` that start
+    /// at `k0` and end at `k1`.
     fn from_cells(&self, cos: [f64; 2], side: Side) -> Option<f64> {
         let cells = self.cells.as_deref()?;
         if !(cos[0] >= -1.0 && cos[1] <= 1.0) {
@@ -227,13 +241,14 @@ impl ProjectedAreaBounds {
         let index = |c: f64| (((c + 1.0) * (0.5 * AREA_CELLS as f64)) as usize).min(AREA_CELLS - 1);
         let (k0, k1) = (index(cos[0]), index(cos[1]));
         // (An unordered range, which validated bounds never give, takes the exact bound too.)
-        if k1 < k0 || k1 >= k0 + CELL_SPAN {
+        if k1 < k0 {
             return None;
         }
-        let span = &cells[k0..=k1];
+        let j = (k1 - k0 + 1).ilog2() as usize;
+        let (a, b) = (&cells[j][k0], &cells[j][k1 + 1 - (1 << j)]);
         let bound = match side {
-            Side::Upper => span.iter().fold(0.0, |m, c| c.upper.max(m)),
-            Side::Lower => span.iter().fold(f64::INFINITY, |m, c| c.lower.min(m)),
+            Side::Upper => a.upper.max(b.upper),
+            Side::Lower => a.lower.min(b.lower),
         };
         bound.is_finite().then_some(bound)
     }
@@ -988,7 +1003,7 @@ mod tests {
             };
             let (mut answered, mut narrow) = (0, 0);
             for _ in 0..4000 {
-                let (c, width) = (2.0 * rng.next_f64() - 1.0, 10f64.powf(-6.0 + 5.0 * rng.next_f64()));
+                let (c, width) = (2.0 * rng.next_f64() - 1.0, 10f64.powf(-6.0 + 6.0 * rng.next_f64()));
                 let cos = [(c - width).max(-1.0), (c + width).min(1.0)];
                 narrow += usize::from(width < 1e-2);
                 let points: Vec<f64> = (0..=16).map(|i| area(cos[0] + (cos[1] - cos[0]) * i as f64 / 16.0, std::f64::consts::TAU * rng.next_f64())).collect();

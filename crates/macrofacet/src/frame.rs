@@ -71,6 +71,17 @@ pub(crate) fn rescaled(v: DVec3) -> DVec3 {
     v * 2f64.powi(-exponent)
 }
 
+/// `(robust_length(v), rescaled(v).try_normalize())`, bit for bit, with one square root where
+/// nothing needs rescaling (the common case; `try_normalize` is `v` times `1 / |v|`).
+pub(crate) fn length_and_direction(v: DVec3) -> (f64, Option<DVec3>) {
+    let largest = v.abs().max_element();
+    if (NO_RESCALE_MIN..=NO_RESCALE_MAX).contains(&largest) {
+        let length = v.length();
+        return (length, Some(v * (1.0 / length)));
+    }
+    (robust_length(v), rescaled(v).try_normalize())
+}
+
 /// `|v|` without the overflow or underflow of `|v|²` beyond 1e±154.
 pub(crate) fn robust_length(v: DVec3) -> f64 {
     let largest = v.abs().max_element();

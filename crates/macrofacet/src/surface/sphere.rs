@@ -4,7 +4,7 @@
 
 use super::{convex_bound, Aabb, Curvature, MeanSurface, SegmentBound, SurfacePoint};
 use crate::error::{check_positive, Error, ErrorKind, Result};
-use crate::frame::{check_finite_vector, rescaled, robust_length};
+use crate::frame::{check_finite_vector, length_and_direction, rescaled, robust_length};
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
@@ -32,11 +32,20 @@ impl Sphere {
     /// [`MeanSurface::point`] but for `uv` (zero): the tracker's queries, where the two angles
     /// of the uv would cost as much as the rest ([`MeanSurface::uv`]).
     fn point_without_uv(&self, p: DVec3) -> SurfacePoint {
-        let (v, distance) = self.distance(p);
+        // Where `|v|` is finite it gives the direction too, with one square root in the common
+        // case ([`Self::distance`] halves `v` otherwise).
+        let v = p - self.center;
+        let (length, direction) = length_and_direction(v);
+        let (v, distance, direction) = if length.is_finite() {
+            (v, length - self.radius, direction)
+        } else {
+            let (half, distance) = self.distance(p);
+            (half, distance, rescaled(half).try_normalize())
+        };
         // At the centre every direction is a gradient; any unit vector keeps the frame valid.
         // Rescaled first: |v|² of a v shorter than 1e-154 loses its precision to underflow (a
         // point 4e-163 from the centre had a normal of length 0.9999955, found by fuzzing).
-        let outward = rescaled(v).try_normalize().unwrap_or(self.pole);
+        let outward = direction.unwrap_or(self.pole);
         SurfacePoint { f: self.sign() * distance, normal: self.sign() * outward, tangent: self.pole.cross(v), uv: DVec2::ZERO }
     }
 

@@ -157,7 +157,8 @@ pub struct ProjectedAreaBounds {
     cells: Option<Box<[[AreaCell; AREA_CELLS]]>>,
 }
 
-/// Cells of `d·n ∈ [−1, 1]` in [`ProjectedAreaBounds::of`] (16 bytes each).
+/// Cells of `d·n ∈ [−1, 1]` in [`ProjectedAreaBounds::of`] (16 bytes each, in each of the
+/// 11 levels of their sparse table).
 pub const AREA_CELLS: usize = 1024;
 /// Levels of the cells' sparse table: spans of `1, 2, 4, …, AREA_CELLS` cells. Any range then
 /// costs two loads: a thin shell's segment across the unit sphere spans up to ~10 cells, the
@@ -185,7 +186,7 @@ struct AreaCell {
 
 impl ProjectedAreaBounds {
     /// The bounds of a medium's distribution, with their cells: 4 × [`AREA_CELLS`] area bounds at
-    /// build (each cell's two bounds and the two extremes that say whether it answers) and 176 KB
+    /// build (each cell's two bounds and the two extremes that say whether it answers) and 176 KiB
     /// with the sparse table: for hosts that build them once per medium.
     pub fn of(medium: &MacrofacetMedium) -> Self {
         Self::with_cells(&medium.phase.ndf)

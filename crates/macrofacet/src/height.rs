@@ -170,18 +170,23 @@ impl HeightProfile {
             }
             if (f_end.min(top) - f_start).abs() > SMALL_DELTA * self.sigma {
                 let ln_start = self.ln_cdf(f_start);
+                let ln_target = ln_start + slope * target;
+                // The distance at which f reaches the level where ln Φ is ln_target; none near
+                // the start (polished below) or where it is not finite.
+                let distance_to = |f: f64| {
+                    if !((f - f_start).abs() > SMALL_DELTA * self.sigma) {
+                        return None;
+                    }
+                    let t_start = if f0 > top { (f0 - top) / -slope } else { 0.0 };
+                    let t = t_start + (f - f_start) / slope;
+                    t.is_finite().then(|| t.clamp(t_start, t_max))
+                };
                 // A descending segment (one that reaches deep below the shell) mostly collides:
                 // where the depth reaches `target`, when that lies before the end, is found
                 // without the total (a second ln Φ); otherwise the total decides, as below.
-                if slope < 0.0 {
-                    let f = self.sigma * probit_of_ln(ln_start + slope * target);
-                    if f >= f_end && f.is_finite() && (f - f_start).abs() > SMALL_DELTA * self.sigma {
-                        let t_start = if f0 > top { (f0 - top) / -slope } else { 0.0 };
-                        let t = t_start + (f - f_start) / slope;
-                        if t.is_finite() {
-                            return Some(t.clamp(t_start, t_max));
-                        }
-                    }
+                let descending = (slope < 0.0).then(|| self.sigma * probit_of_ln(ln_target));
+                if let Some(t) = descending.filter(|&f| f >= f_end).and_then(distance_to) {
+                    return Some(t);
                 }
                 let total = if f_end == f64::NEG_INFINITY {
                     f64::INFINITY
@@ -192,13 +197,8 @@ impl HeightProfile {
                 if !(target < total) {
                     return None;
                 }
-                let f = self.sigma * probit_of_ln(ln_start + slope * target);
-                if (f - f_start).abs() > SMALL_DELTA * self.sigma {
-                    let t_start = if f0 > top { (f0 - top) / -slope } else { 0.0 };
-                    let t = t_start + (f - f_start) / slope;
-                    if t.is_finite() {
-                        return Some(t.clamp(t_start, t_max));
-                    }
+                if let Some(t) = distance_to(descending.unwrap_or_else(|| self.sigma * probit_of_ln(ln_target))) {
+                    return Some(t);
                 }
             }
         }

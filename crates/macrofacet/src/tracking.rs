@@ -195,21 +195,18 @@ impl ProjectedAreaBounds {
     fn with_cells(ndf: &Ndf) -> Self {
         let mut bounds = Self::new(ndf);
         let h = 2.0 / AREA_CELLS as f64;
-        let cells: Vec<AreaCell> = (0..AREA_CELLS)
-            .map(|k| {
-                let cell = [-1.0 + k as f64 * h - CELL_OVERLAP, -1.0 + (k + 1) as f64 * h + CELL_OVERLAP];
-                let (upper, lower) = (bounds.upper_exact(cell), bounds.lower_exact(cell));
-                let upper_floor = bounds.bound(&bounds.upper, cell, Side::Lower) * (1.0 - AREA_ROUNDING);
-                let lower_ceiling = bounds.bound(&bounds.lower, cell, Side::Upper) * (1.0 + AREA_ROUNDING);
-                // (Both zero in a lobe's far tail: tight.)
-                AreaCell {
-                    upper: if upper <= CELL_LOOSENESS * upper_floor { upper } else { f64::INFINITY },
-                    lower: if lower_ceiling <= CELL_LOOSENESS * lower { lower } else { f64::NEG_INFINITY },
-                }
-            })
-            .collect();
         let mut table = vec![[AreaCell { upper: f64::INFINITY, lower: f64::NEG_INFINITY }; AREA_CELLS]; CELL_LEVELS].into_boxed_slice();
-        table[0].copy_from_slice(&cells);
+        for (k, slot) in table[0].iter_mut().enumerate() {
+            let cell = [-1.0 + k as f64 * h - CELL_OVERLAP, -1.0 + (k + 1) as f64 * h + CELL_OVERLAP];
+            let (upper, lower) = (bounds.upper_exact(cell), bounds.lower_exact(cell));
+            let upper_floor = bounds.bound(&bounds.upper, cell, Side::Lower) * (1.0 - AREA_ROUNDING);
+            let lower_ceiling = bounds.bound(&bounds.lower, cell, Side::Upper) * (1.0 + AREA_ROUNDING);
+            // (Both zero in a lobe's far tail: tight.)
+            *slot = AreaCell {
+                upper: if upper <= CELL_LOOSENESS * upper_floor { upper } else { f64::INFINITY },
+                lower: if lower_ceiling <= CELL_LOOSENESS * lower { lower } else { f64::NEG_INFINITY },
+            };
+        }
         for j in 1..CELL_LEVELS {
             let half = 1 << (j - 1);
             for k in 0..AREA_CELLS {

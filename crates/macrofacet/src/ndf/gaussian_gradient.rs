@@ -148,7 +148,8 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
         }
     };
     let (pdf_c, cdf_minus_c) = (normal_pdf(c), normal_cdf(-c));
-    // The tail at x from `e = gauss(x)`, which the step needs too (one exponential per step).
+    // The tail at x from `e = gauss(x)`, which the step needs too (one exponential per step);
+    // for c < 0 the survival S(x)/φ(c) = e^{-(x² - c²)/2} [1 − |c| M(x)] (x >= −c).
     let tail = |x: f64, e: f64| -> f64 {
         if lower_tail {
             pdf_c - e + c * (normal_cdf(x) - cdf_minus_c)
@@ -158,7 +159,7 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
             e * (1.0 + c * mills_ratio(x))
         }
     };
-    let z = if c >= 0.0 { pdf_c + c * normal_cdf(c) } else { survival_scaled(c, -c) };
+    let z = if c >= 0.0 { pdf_c + c * normal_cdf(c) } else { tail(-c, gauss(-c)) };
     let ln_target = if lower_tail { (u * z).ln() } else { ((-u).ln_1p()) + z.ln() };
     // h(x) = ±(ln tail(x) − ln target) is increasing, with h' = p/T and h'' = p'/T ∓ (p/T)²
     // for the density p = (x + c) φ(x), p' = φ(x) (1 − x (x + c)).
@@ -204,11 +205,6 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
         x = next;
     }
     x
-}
-
-/// `S(x) / φ(c)` for `c < 0`, `x >= -c`: `e^{-(x² - c²)/2} [1 − |c| M(x)]`.
-fn survival_scaled(c: f64, x: f64) -> f64 {
-    (-(x - c) * (x + c) * 0.5).exp() * (1.0 + c * mills_ratio(x))
 }
 
 /// The Mills ratio `M(x) = Φ(−x)/φ(x) = sqrt(π/2) erfcx(x/√2)`.

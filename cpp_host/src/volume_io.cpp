@@ -1,12 +1,15 @@
-// mfhost — Mitsuba .vol files (see volume_io.h; OpenVDB grids are in volume_vdb.cpp).
+// mfhost — Mitsuba .vol files (see volume_io.h), and the loading of the OpenVDB reader module
+// (volume_vdb.cpp).
 #include "volume_io.h"
 
+#include <dlfcn.h>
 #include <sys/stat.h>
 
 #include <cctype>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 
 #include "error.h"
 
@@ -43,6 +46,57 @@ void put_f32(std::string& s, float f) {
 bool is_regular_file(const std::string& path) {
     struct stat st;
     return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+namespace {
+
+// volume_vdb.cpp's entry point (its signature there).
+using ReadVdbGrid = int (*)(const char* path, const char* grid_name, int centering, VolumeGridData* out,
+                            std::string* error);
+
+// The directory of the binary this code is linked into (mfrender, a test), with its slash.
+std::string own_directory() {
+    Dl_info info;
+    if (dladdr(reinterpret_cast<void*>(&own_directory), &info) == 0 || info.dli_fname == nullptr) return std::string();
+    const std::string path = info.dli_fname;
+    const size_t slash = path.rfind('/');
+    return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+// Loads the OpenVDB module once: next to the binary first (a copied or installed build), then
+// where the build put it. Throws mf::Error with what dlopen said for each place tried.
+ReadVdbGrid vdb_reader() {
+    static ReadVdbGrid reader = nullptr;
+    static std::string failure;
+    static std::once_flag once;
+    std::call_once(once, [] {
+        std::string tried;
+        for (const std::string& path : {own_directory() + MFHOST_VDB_MODULE_NAME, std::string(MFHOST_VDB_MODULE_PATH)}) {
+            void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+            if (module == nullptr) {
+                const char* why = dlerror();
+                tried += (tried.empty() ? "" : "; ") + std::string(why ? why : path + ": not loadable");
+                continue;
+            }
+            reader = reinterpret_cast<ReadVdbGrid>(dlsym(module, "mfhost_vdb_read_grid"));
+            if (reader != nullptr) return;
+            tried += (tried.empty() ? "" : "; ") + path + ": no entry point mfhost_vdb_read_grid";
+        }
+        failure = "mfrender's OpenVDB reader module " + std::string(MFHOST_VDB_MODULE_NAME) +
+                  " could not be loaded (" + tried + "); rebuild mfrender (it builds the module beside itself)";
+    });
+    if (reader == nullptr) throw Error(failure);
+    return reader;
+}
+
+}  // namespace
+
+VolumeGridData read_vdb_grid(const std::string& path, const std::string& grid_name, GridCentering centering) {
+    if (!is_regular_file(path)) throw Error("cannot read OpenVDB file " + quote(path, 200) + ": no such file");
+    VolumeGridData grid;
+    std::string error;
+    if (!vdb_reader()(path.c_str(), grid_name.c_str(), centering == GridCentering::Node ? 1 : 0, &grid, &error)) throw Error(error);
+    return grid;
 }
 
 bool is_vdb_path(const std::string& path) {

@@ -45,7 +45,9 @@ VolumeGridData read_vol_file(const std::string& path);
 enum class GridCentering { Cell, Node };
 /// Reads grid `grid_name` of an OpenVDB file (empty name: the file's only grid); throws mf::Error
 /// for a missing or unreadable file, a missing grid (listing the file's grids), an unsupported
-/// value type or transform, or an empty grid.
+/// value type or transform, or an empty grid. The reader is a module (libmfhost_vdb.so, beside
+/// the binary) loaded on the first call, so that runs without .vdb files do not load OpenVDB;
+/// a module that cannot be loaded is an mf::Error too.
 VolumeGridData read_vdb_grid(const std::string& path, const std::string& grid_name, GridCentering centering);
 
 /// Writes a Mitsuba .vol file (tests, tools). Throws mf::Error if it cannot.

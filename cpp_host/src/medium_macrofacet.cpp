@@ -18,6 +18,39 @@ namespace {
 
 mf_frame frame_of(const MediumInteraction& mi) { return mf_frame{to_mf(mi.frame_n), to_mf(mi.frame_t)}; }
 
+/// Slots held by live threads, one bit each (MacrofacetMedium::Tally).
+std::atomic<uint64_t> held_tally_slots{0};
+
+/// A thread's lease on a tally slot: the lowest free one, given back when the thread ends (the
+/// release orders its counts before the next holder's); `slots` (all taken) when none is free.
+struct TallyLease {
+    unsigned slot;
+    bool held = false;
+    explicit TallyLease(unsigned slots) : slot(slots) {
+        uint64_t held = held_tally_slots.load(std::memory_order_relaxed);
+        for (;;) {
+            const uint64_t free = ~held & (slots >= 64 ? ~uint64_t(0) : (uint64_t(1) << slots) - 1);
+            if (free == 0) return;
+            const unsigned s = unsigned(__builtin_ctzll(free));
+            if (held_tally_slots.compare_exchange_weak(held, held | uint64_t(1) << s, std::memory_order_acquire,
+                                                       std::memory_order_relaxed)) {
+                slot = s;
+                held = true;
+                return;
+            }
+        }
+    }
+    ~TallyLease() {
+        if (held) held_tally_slots.fetch_and(~(uint64_t(1) << slot), std::memory_order_release);
+    }
+};
+
+/// This thread's tally slot, out of `slots` (at most 64), or `slots` for the shared one.
+unsigned tally_slot(unsigned slots) {
+    thread_local const TallyLease lease(slots);
+    return lease.slot;
+}
+
 /// The library's phase function (seeds/000 Eq. 11 with the flakes' reflectance) in the frame the
 /// tracker returned with the collision. Host convention: `wo` points back along the incoming ray,
 /// `wi` is the new direction; the library's `wi` is our `wo` and its `wo` our `wi`.
@@ -94,19 +127,27 @@ MacrofacetMedium::~MacrofacetMedium() {
 }
 
 void MacrofacetMedium::count(const mf_track_stats& s) const {
-    calls_.fetch_add(1, std::memory_order_relaxed);
-    queries_.fetch_add(s.surface_queries, std::memory_order_relaxed);
-    segments_.fetch_add(s.segments, std::memory_order_relaxed);
-    tentative_.fetch_add(s.tentative_collisions, std::memory_order_relaxed);
+    const unsigned slot = tally_slot(kTallySlots);
+    Tally& t = tallies_[slot];
+    const uint64_t add[4] = {1, s.surface_queries, s.segments, s.tentative_collisions};
+    std::atomic<uint64_t>* into[4] = {&t.calls, &t.queries, &t.segments, &t.tentative};
+    for (int i = 0; i < 4; ++i) {
+        if (slot < kTallySlots)  // this thread's own slot: the only writer
+            into[i]->store(into[i]->load(std::memory_order_relaxed) + add[i], std::memory_order_relaxed);
+        else
+            into[i]->fetch_add(add[i], std::memory_order_relaxed);
+    }
     if (s.majorant_violations) violations_.fetch_add(s.majorant_violations, std::memory_order_relaxed);
 }
 
 TrackCounts MacrofacetMedium::counts() const {
     TrackCounts c;
-    c.calls = calls_.load();
-    c.surface_queries = queries_.load();
-    c.segments = segments_.load();
-    c.tentative_collisions = tentative_.load();
+    for (const Tally& t : tallies_) {
+        c.calls += t.calls.load();
+        c.surface_queries += t.queries.load();
+        c.segments += t.segments.load();
+        c.tentative_collisions += t.tentative.load();
+    }
     c.majorant_violations = violations_.load();
     return c;
 }

@@ -90,10 +90,12 @@ fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64)> {
     Ok((origin, d, q.t_max))
 }
 
-/// One call: a free flight or a transmittance, generic over the surface kind.
-/// One call: a free flight or a transmittance, with the field (if any) and the host's data.
+/// One call: a free flight or a transmittance, with the field (if any) and the host's data. The
+/// result is written into `out` once the call has succeeded (nothing is written on an error):
+/// in place, because `mf_collision` is 224 bytes and moving it out through the visitor, the
+/// `Result`s and the C boundary took a third of the calls' `memcpy` traffic.
 struct Call<'a> {
-    kind: Kind,
+    out: Out<'a>,
     medium: &'a MacrofacetMedium,
     bounds: &'a ProjectedAreaBounds,
     field: Option<&'a mf_field>,
@@ -102,67 +104,65 @@ struct Call<'a> {
     seed: u64,
 }
 
-#[derive(Clone, Copy)]
-enum Kind {
-    FreeFlight,
-    Transmittance,
-}
-
-enum Outcome {
-    Collision(mf_collision),
-    Transmittance(mf_transmittance),
+/// What a call computes, and where it goes.
+enum Out<'a> {
+    FreeFlight(&'a mut mf_collision),
+    Transmittance(&'a mut mf_transmittance),
 }
 
 impl SurfaceVisitor for Call<'_> {
-    type Output = macrofacet::error::Result<Outcome>;
+    type Output = macrofacet::error::Result<()>;
     fn visit<S: MeanSurface>(self, surface: &S) -> Self::Output {
         match self.field {
             // The collision reports no uv: the tracker need not complete it.
-            None => self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv()),
+            None => {
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv();
+                run(self.out, self.ray, self.seed, &tracker)
+            }
             Some(field) => {
                 let field = CallbackField::new(field, self.user_data);
-                self.run(&Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv())
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv();
+                run(self.out, self.ray, self.seed, &tracker)
             }
         }
     }
 }
 
-impl Call<'_> {
-    fn run<S: MeanSurface, F: MediumField>(&self, tracker: &Tracker<S, F>) -> macrofacet::error::Result<Outcome> {
-        let mut stats = TrackStats::default();
-        let (origin, d, t_max) = self.ray;
-        let rng = &mut Pcg32::new(self.seed, TRACK_STREAM);
-        match self.kind {
-            Kind::FreeFlight => {
-                let flight = tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?;
-                let zero = DVec3::ZERO.into();
-                Ok(Outcome::Collision(match flight {
-                    TrackedFlight::Scatter { t, point, local } => mf_collision {
-                        scattered: true,
-                        t,
-                        p: (origin + t * d).into(),
-                        f: point.f,
-                        frame: mf_frame { normal: point.normal.into(), tangent: point.tangent.into() },
-                        local: (&local).into(),
-                        stats: stats.into(),
-                    },
-                    TrackedFlight::Pass => mf_collision {
-                        scattered: false,
-                        t: t_max,
-                        p: zero,
-                        f: 0.0,
-                        frame: mf_frame { normal: zero, tangent: zero },
-                        local: mf_local_params::NONE,
-                        stats: stats.into(),
-                    },
-                }))
-            }
-            Kind::Transmittance => {
-                let transmittance = tracker.transmittance(origin, d, t_max, rng, &mut stats)?;
-                Ok(Outcome::Transmittance(mf_transmittance { transmittance, stats: stats.into() }))
-            }
+fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64), seed: u64, tracker: &Tracker<S, F>) -> macrofacet::error::Result<()> {
+    let mut stats = TrackStats::default();
+    let (origin, d, t_max) = ray;
+    let rng = &mut Pcg32::new(seed, TRACK_STREAM);
+    match out {
+        Out::FreeFlight(slot) => {
+            let flight = tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?;
+            let zero = DVec3::ZERO.into();
+            *slot = match flight {
+                TrackedFlight::Scatter { t, point, local } => mf_collision {
+                    scattered: true,
+                    t,
+                    p: (origin + t * d).into(),
+                    f: point.f,
+                    frame: mf_frame { normal: point.normal.into(), tangent: point.tangent.into() },
+                    local: (&local).into(),
+                    stats: stats.into(),
+                },
+                TrackedFlight::Pass => mf_collision {
+                    scattered: false,
+                    t: t_max,
+                    p: zero,
+                    f: 0.0,
+                    frame: mf_frame { normal: zero, tangent: zero },
+                    local: mf_local_params::NONE,
+                    stats: stats.into(),
+                },
+            };
+        }
+        Out::Transmittance(slot) => {
+            let transmittance = tracker.transmittance(origin, d, t_max, rng, &mut stats)?;
+            *slot = mf_transmittance { transmittance, stats: stats.into() };
         }
     }
+    Ok(())
 }
 
 /// The optional field argument.
@@ -171,23 +171,17 @@ pub(super) fn field_arg<'a>(field: *const mf_field) -> Option<&'a mf_field> {
     unsafe { field.as_ref() }
 }
 
-fn track(kind: Kind, medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<Outcome> {
-    let call = Call { kind, medium: &medium.inner, bounds: &medium.bounds, field, user_data, ray: query(q)?, seed: q.seed };
+fn track(out: Out<'_>, medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<()> {
+    let call = Call { out, medium: &medium.inner, bounds: &medium.bounds, field, user_data, ray: query(q)?, seed: q.seed };
     Ok(with_surface(surface, user_data, call)?)
 }
 
-fn free_flight(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_collision> {
-    match track(Kind::FreeFlight, medium, surface, field, user_data, q)? {
-        Outcome::Collision(c) => Ok(c),
-        Outcome::Transmittance(_) => unreachable!("a free flight returns a collision"),
-    }
+fn free_flight(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query, out: &mut mf_collision) -> FfiResult<()> {
+    track(Out::FreeFlight(out), medium, surface, field, user_data, q)
 }
 
-fn transmittance(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<mf_transmittance> {
-    match track(Kind::Transmittance, medium, surface, field, user_data, q)? {
-        Outcome::Transmittance(t) => Ok(t),
-        Outcome::Collision(_) => unreachable!("a transmittance returns a transmittance"),
-    }
+fn transmittance(medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query, out: &mut mf_transmittance) -> FfiResult<()> {
+    track(Out::Transmittance(out), medium, surface, field, user_data, q)
 }
 
 /// Samples a free flight along `query`'s ray through the medium around `surface`: the distance
@@ -213,9 +207,7 @@ pub unsafe extern "C" fn mf_track_free_flight(
 ) -> mf_status {
     boundary(|| {
         let (m, s, q) = (arg(medium, "medium")?, arg(surface, "surface")?, arg(query, "query")?);
-        let slot = out(out_collision, "out_collision")?;
-        *slot = free_flight(m, s, field_arg(field), user_data, q)?;
-        Ok(())
+        free_flight(m, s, field_arg(field), user_data, q, out(out_collision, "out_collision")?)
     })
 }
 
@@ -235,9 +227,7 @@ pub unsafe extern "C" fn mf_track_transmittance(
 ) -> mf_status {
     boundary(|| {
         let (m, s, q) = (arg(medium, "medium")?, arg(surface, "surface")?, arg(query, "query")?);
-        let slot = out(out_transmittance, "out_transmittance")?;
-        *slot = transmittance(m, s, field_arg(field), user_data, q)?;
-        Ok(())
+        transmittance(m, s, field_arg(field), user_data, q, out(out_transmittance, "out_transmittance")?)
     })
 }
 
@@ -251,7 +241,8 @@ fn track_batch<R: Copy>(
     queries: *const mf_track_query,
     count: usize,
     output: *mut R,
-    one: impl Fn(&mf_medium, &mf_surface, Option<&mf_field>, *mut c_void, &mf_track_query) -> FfiResult<R>,
+    blank: R,
+    one: impl Fn(&mf_medium, &mf_surface, Option<&mf_field>, *mut c_void, &mf_track_query, &mut R) -> FfiResult<()>,
 ) -> mf_status {
     boundary(|| {
         let (m, s) = (arg(medium, "medium")?, arg(surface, "surface")?);
@@ -266,7 +257,11 @@ fn track_batch<R: Copy>(
         for (i, q) in queries.iter().enumerate() {
             query(q).map_err(|e| at(i, e))?;
         }
-        let results = queries.iter().enumerate().map(|(i, q)| one(m, s, field_arg(field), user_data, q).map_err(|e| at(i, e))).collect::<FfiResult<Vec<R>>>()?;
+        // Results go to an array of blanks first, so that an error leaves the host's unchanged.
+        let mut results = vec![blank; count];
+        for (i, (q, r)) in queries.iter().zip(results.iter_mut()).enumerate() {
+            one(m, s, field_arg(field), user_data, q, r).map_err(|e| at(i, e))?;
+        }
         // SAFETY: see above; `output` is non-NULL.
         unsafe { std::slice::from_raw_parts_mut(output, count) }.copy_from_slice(&results);
         Ok(())
@@ -287,7 +282,9 @@ pub unsafe extern "C" fn mf_track_free_flight_batch(
     count: usize,
     out_collisions: *mut mf_collision,
 ) -> mf_status {
-    track_batch(medium, surface, field, user_data, queries, count, out_collisions, free_flight)
+    let zero = DVec3::ZERO.into();
+    let blank = mf_collision { scattered: false, t: 0.0, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, local: mf_local_params::NONE, stats: TrackStats::default().into() };
+    track_batch(medium, surface, field, user_data, queries, count, out_collisions, blank, free_flight)
 }
 
 /// Batch form of [`mf_track_transmittance`].
@@ -304,5 +301,6 @@ pub unsafe extern "C" fn mf_track_transmittance_batch(
     count: usize,
     out_transmittances: *mut mf_transmittance,
 ) -> mf_status {
-    track_batch(medium, surface, field, user_data, queries, count, out_transmittances, transmittance)
+    let blank = mf_transmittance { transmittance: 0.0, stats: TrackStats::default().into() };
+    track_batch(medium, surface, field, user_data, queries, count, out_transmittances, blank, transmittance)
 }

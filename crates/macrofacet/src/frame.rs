@@ -26,10 +26,11 @@ impl Frame {
             Error::new(ErrorKind::InvalidArgument, "the normal must not be the zero vector")
         })?;
         // A tangent (nearly) parallel to n leaves only rounding noise after the projection;
-        // normalising that noise would give a vector that is not orthogonal to n.
+        // normalising that noise would give a vector that is not orthogonal to n. (Lengths
+        // compared squared: |projection| > 1e-6 |tangent|, without two square roots.)
         let tangent = rescaled(tangent);
         let projected = tangent - n * n.dot(tangent);
-        let s = if projected.length() > 1e-6 * tangent.length() {
+        let s = if projected.length_squared() > 1e-12 * tangent.length_squared() {
             rescaled(projected).normalize()
         } else {
             n.any_orthonormal_vector()

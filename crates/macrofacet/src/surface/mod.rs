@@ -53,8 +53,12 @@ impl SurfacePoint {
     /// (every query of a mean surface goes through this: the tracker's, `mf_surface_eval`'s and
     /// the enclosure's; found by fuzzing: a degenerate mesh or a far point gave a zero normal).
     pub fn validated(self, p: DVec3) -> Result<SurfacePoint> {
-        let len = self.normal.length();
-        if self.f.is_nan() || !self.normal.is_finite() || (len - 1.0).abs() > NORMAL_TOLERANCE || !self.tangent.is_finite() || !self.uv.is_finite() {
+        // |n| within NORMAL_TOLERANCE of 1, compared squared (no square root on the hot path);
+        // a NaN or infinite normal fails it too.
+        const LENGTH_SQ: [f64; 2] = [(1.0 - NORMAL_TOLERANCE) * (1.0 - NORMAL_TOLERANCE), (1.0 + NORMAL_TOLERANCE) * (1.0 + NORMAL_TOLERANCE)];
+        let unit = (LENGTH_SQ[0]..=LENGTH_SQ[1]).contains(&self.normal.length_squared());
+        if self.f.is_nan() || !unit || !self.tangent.is_finite() || !self.uv.is_finite() {
+            let len = self.normal.length();
             return Err(Error::new(
                 ErrorKind::InvalidArgument,
                 format!(

@@ -45,10 +45,16 @@ struct TallyLease {
     }
 };
 
-/// This thread's tally slot, out of `slots` (at most 64), or `slots` for the shared one.
+/// This thread's tally slot, out of `slots` (at most 64), or `slots` for the shared one. The
+/// slot is cached in a trivially initialised thread-local (initial-exec: mfhost is linked into
+/// executables), so that the lease's guard and TLS lookup are paid once per thread.
 unsigned tally_slot(unsigned slots) {
-    thread_local const TallyLease lease(slots);
-    return lease.slot;
+    static thread_local unsigned cached __attribute__((tls_model("initial-exec"))) = ~0u;
+    if (cached == ~0u) {
+        thread_local const TallyLease lease(slots);
+        cached = lease.slot;
+    }
+    return cached;
 }
 
 /// The library's phase function (seeds/000 Eq. 11 with the flakes' reflectance) in the frame the
@@ -129,14 +135,16 @@ MacrofacetMedium::~MacrofacetMedium() {
 void MacrofacetMedium::count(const mf_track_stats& s) const {
     const unsigned slot = tally_slot(kTallySlots);
     Tally& t = tallies_[slot];
-    const uint64_t add[4] = {1, s.surface_queries, s.segments, s.tentative_collisions};
-    std::atomic<uint64_t>* into[4] = {&t.calls, &t.queries, &t.segments, &t.tentative};
-    for (int i = 0; i < 4; ++i) {
-        if (slot < kTallySlots)  // this thread's own slot: the only writer
-            into[i]->store(into[i]->load(std::memory_order_relaxed) + add[i], std::memory_order_relaxed);
+    auto add = [own = slot < kTallySlots](std::atomic<uint64_t>& to, uint64_t n) {
+        if (own)  // this thread's own slot: the only writer
+            to.store(to.load(std::memory_order_relaxed) + n, std::memory_order_relaxed);
         else
-            into[i]->fetch_add(add[i], std::memory_order_relaxed);
-    }
+            to.fetch_add(n, std::memory_order_relaxed);
+    };
+    add(t.calls, 1);
+    add(t.queries, s.surface_queries);
+    add(t.segments, s.segments);
+    add(t.tentative, s.tentative_collisions);
     if (s.majorant_violations) violations_.fetch_add(s.majorant_violations, std::memory_order_relaxed);
 }
 

@@ -747,7 +747,7 @@ enum mf_status mf_gpis_scatter(const struct mf_gpis *gpis,
  * the domain stated there (e.g. `sigma` outside [1e-50, 1e50]) are refused with the reason. On
  * failure nothing is written to `*out_medium` and [`super::mf_last_error_message`] names the
  * parameter. The handle also holds the bounds of the flakes' projected area that the tracking
- * calls take their majorants from, built here once: 176 KiB per medium.
+ * calls take their majorants from, built here once: 88 KiB per medium.
  *
  * # Safety
  * `params` must be a live handle (or NULL); `out_medium` NULL or valid for writes.

@@ -110,7 +110,7 @@ pub struct mf_phase_sample_query {
 /// An immutable macrofacet medium. Safe to share between threads.
 pub struct mf_medium {
     pub(crate) inner: MacrofacetMedium,
-    /// Built once for the tracking calls (`ProjectedAreaBounds::of`, 176 KiB).
+    /// Built once for the tracking calls (`ProjectedAreaBounds::of`, 88 KiB).
     pub(crate) bounds: ProjectedAreaBounds,
 }
 
@@ -172,7 +172,7 @@ pub(super) fn uniform(name: impl std::fmt::Display, u: f64) -> FfiResult<f64> {
 /// the domain stated there (e.g. `sigma` outside [1e-50, 1e50]) are refused with the reason. On
 /// failure nothing is written to `*out_medium` and [`super::mf_last_error_message`] names the
 /// parameter. The handle also holds the bounds of the flakes' projected area that the tracking
-/// calls take their majorants from, built here once: 176 KiB per medium.
+/// calls take their majorants from, built here once: 88 KiB per medium.
 ///
 /// # Safety
 /// `params` must be a live handle (or NULL); `out_medium` NULL or valid for writes.

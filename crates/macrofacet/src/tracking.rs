@@ -157,7 +157,7 @@ pub struct ProjectedAreaBounds {
     cells: Option<Box<[[AreaCell; AREA_CELLS]]>>,
 }
 
-/// Cells of `d·n ∈ [−1, 1]` in [`ProjectedAreaBounds::of`] (16 bytes each, in each of the
+/// Cells of `d·n ∈ [−1, 1]` in [`ProjectedAreaBounds::of`] (8 bytes each, in each of the
 /// 11 levels of their sparse table).
 pub const AREA_CELLS: usize = 1024;
 /// Levels of the cells' sparse table: spans of `1, 2, 4, …, AREA_CELLS` cells. Any range then
@@ -177,16 +177,35 @@ const CELL_LOOSENESS: f64 = 1.1;
 /// The bounds of one cell of `d·n` ([`ProjectedAreaBounds`]): `S_up` over the cell where it is
 /// within [`CELL_LOOSENESS`] of the upper envelope's smallest area there, else `+∞`; `S_lo`
 /// where the lower envelope's largest area is within that factor of it, else `−∞` (so that the
-/// largest and smallest over a range of cells say at once whether every cell answers).
+/// largest and smallest over a range of cells say at once whether every cell answers). In f32,
+/// rounded outward (`S_up` up, `S_lo` down), which halves the table (88 KiB) for a looseness of
+/// at most 2^-24 relative.
 #[derive(Clone, Copy, Debug)]
 struct AreaCell {
-    upper: f64,
-    lower: f64,
+    upper: f32,
+    lower: f32,
+}
+
+impl AreaCell {
+    /// The cell of the f64 bounds `upper` (its floor `upper_floor`) and `lower` (its ceiling
+    /// `lower_ceiling`), each rounded outward to f32 and kept where still within
+    /// [`CELL_LOOSENESS`] of the floor (ceiling): not beyond f32's range, nor deep among its
+    /// subnormals.
+    fn new(upper: f64, upper_floor: f64, lower: f64, lower_ceiling: f64) -> AreaCell {
+        let up = upper as f32;
+        let up = if f64::from(up) < upper { up.next_up() } else { up };
+        let down = lower as f32;
+        let down = if f64::from(down) > lower { down.next_down() } else { down };
+        AreaCell {
+            upper: if f64::from(up) <= CELL_LOOSENESS * upper_floor { up } else { f32::INFINITY },
+            lower: if lower_ceiling <= CELL_LOOSENESS * f64::from(down) { down } else { f32::NEG_INFINITY },
+        }
+    }
 }
 
 impl ProjectedAreaBounds {
     /// The bounds of a medium's distribution, with their cells: 4 × [`AREA_CELLS`] area bounds at
-    /// build (each cell's two bounds and the two extremes that say whether it answers) and 176 KiB
+    /// build (each cell's two bounds and the two extremes that say whether it answers) and 88 KiB
     /// with the sparse table: for hosts that build them once per medium.
     pub fn of(medium: &MacrofacetMedium) -> Self {
         Self::with_cells(&medium.phase.ndf)
@@ -195,17 +214,13 @@ impl ProjectedAreaBounds {
     fn with_cells(ndf: &Ndf) -> Self {
         let mut bounds = Self::new(ndf);
         let h = 2.0 / AREA_CELLS as f64;
-        let mut table = vec![[AreaCell { upper: f64::INFINITY, lower: f64::NEG_INFINITY }; AREA_CELLS]; CELL_LEVELS].into_boxed_slice();
+        let mut table = vec![[AreaCell { upper: f32::INFINITY, lower: f32::NEG_INFINITY }; AREA_CELLS]; CELL_LEVELS].into_boxed_slice();
         for (k, slot) in table[0].iter_mut().enumerate() {
             let cell = [-1.0 + k as f64 * h - CELL_OVERLAP, -1.0 + (k + 1) as f64 * h + CELL_OVERLAP];
-            let (upper, lower) = (bounds.upper_exact(cell), bounds.lower_exact(cell));
             let upper_floor = bounds.bound(&bounds.upper, cell, Side::Lower) * (1.0 - AREA_ROUNDING);
             let lower_ceiling = bounds.bound(&bounds.lower, cell, Side::Upper) * (1.0 + AREA_ROUNDING);
             // (Both zero in a lobe's far tail: tight.)
-            *slot = AreaCell {
-                upper: if upper <= CELL_LOOSENESS * upper_floor { upper } else { f64::INFINITY },
-                lower: if lower_ceiling <= CELL_LOOSENESS * lower { lower } else { f64::NEG_INFINITY },
-            };
+            *slot = AreaCell::new(bounds.upper_exact(cell), upper_floor, bounds.lower_exact(cell), lower_ceiling);
         }
         for j in 1..CELL_LEVELS {
             let half = 1 << (j - 1);
@@ -248,7 +263,7 @@ impl ProjectedAreaBounds {
             Side::Upper => a.upper.max(b.upper),
             Side::Lower => a.lower.min(b.lower),
         };
-        bound.is_finite().then_some(bound)
+        bound.is_finite().then_some(f64::from(bound))
     }
 
     /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent:

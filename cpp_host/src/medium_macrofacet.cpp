@@ -27,12 +27,12 @@ struct TallyLease {
     unsigned slot;
     bool held = false;
     explicit TallyLease(unsigned slots) : slot(slots) {
-        uint64_t held = held_tally_slots.load(std::memory_order_relaxed);
+        uint64_t taken = held_tally_slots.load(std::memory_order_relaxed);
         for (;;) {
-            const uint64_t free = ~held & (slots >= 64 ? ~uint64_t(0) : (uint64_t(1) << slots) - 1);
+            const uint64_t free = ~taken & (slots >= 64 ? ~uint64_t(0) : (uint64_t(1) << slots) - 1);
             if (free == 0) return;
             const unsigned s = unsigned(__builtin_ctzll(free));
-            if (held_tally_slots.compare_exchange_weak(held, held | uint64_t(1) << s, std::memory_order_acquire,
+            if (held_tally_slots.compare_exchange_weak(taken, taken | uint64_t(1) << s, std::memory_order_acquire,
                                                        std::memory_order_relaxed)) {
                 slot = s;
                 held = true;
@@ -131,6 +131,8 @@ MacrofacetMedium::~MacrofacetMedium() {
                      label_.c_str(), (unsigned long long)v);
     mf_medium_free(handle_);
 }
+
+unsigned tally_slots_held() { return unsigned(__builtin_popcountll(held_tally_slots.load())); }
 
 void MacrofacetMedium::count(const mf_track_stats& s) const {
     const unsigned slot = tally_slot(kTallySlots);

@@ -78,6 +78,10 @@ private:
     mutable std::atomic<uint64_t> violations_{0};  // exact and rare: always fetch_add
 };
 
+/// How many threads hold a tally slot of MacrofacetMedium's counts now (each gives its slot back
+/// when it ends; for tests).
+unsigned tally_slots_held();
+
 /// Builds the macrofacet medium of a mean surface from its parameter bag (mf_params_* /
 /// mf_medium_new), with its spatially varying parameters as a library field; throws mf::Error at
 /// the file:line of the offending parameter.

@@ -36,6 +36,7 @@
 #include "check.h"
 #include "integrator.h"
 #include "mean_surface.h"
+#include "render.h"
 #include "medium_macrofacet.h"
 #include "scene_builder.h"
 #include "scene_util.h"
@@ -545,6 +546,38 @@ TEST_CASE(determinism) {
     CHECK(!fa.empty());
     CHECK(fa == read_file(b));
     CHECK(fa == read_file(c));
+}
+
+// The tracking counts that mfrender prints are per-thread tallies summed: the same at 1 and 3
+// threads (the render is deterministic), and every rendering thread gives its slot back.
+TEST_CASE(tracking_counts_across_threads) {
+    auto scene = build_scene(parse_scene_string(small_scene(4), work("mf_counts.xml"), {}), BuildOptions(), nullptr);
+    const MacrofacetMedium* medium = nullptr;
+    for (const auto& m : scene->media)
+        if (auto* mm = dynamic_cast<const MacrofacetMedium*>(m.get())) medium = mm;
+    CHECK(medium != nullptr);
+    if (!medium) return;
+    const unsigned held_before = tally_slots_held();
+    TrackCounts counts[2];
+    for (int i = 0; i < 2; ++i) {
+        const TrackCounts before = medium->counts();
+        RenderOptions o;
+        o.threads = i == 0 ? 1 : 3;
+        RenderStats st;
+        render_film(*scene, o, &st);
+        const TrackCounts after = medium->counts();
+        counts[i] = {after.calls - before.calls, after.surface_queries - before.surface_queries, after.segments - before.segments,
+                     after.tentative_collisions - before.tentative_collisions, after.majorant_violations - before.majorant_violations};
+        CHECK(tally_slots_held() == held_before);
+    }
+    CHECK(counts[0].calls > 1000);
+    CHECK(counts[0].calls == counts[1].calls);
+    CHECK(counts[0].surface_queries == counts[1].surface_queries);
+    CHECK(counts[0].segments == counts[1].segments);
+    CHECK(counts[0].tentative_collisions == counts[1].tentative_collisions);
+    CHECK(counts[0].majorant_violations == 0 && counts[1].majorant_violations == 0);
+    std::printf("  tracking counts: %llu calls, %llu surface queries at 1 and 3 threads\n", (unsigned long long)counts[0].calls,
+                (unsigned long long)counts[0].surface_queries);
 }
 
 TEST_MAIN()

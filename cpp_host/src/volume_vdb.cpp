@@ -124,7 +124,7 @@ VolumeGridData read_grid(const std::string& path, const std::string& grid_name, 
 
 }  // namespace mf
 
-// The module's one entry point (volume_io.h, kVdbModuleEntry): reads the grid into *out, or
+// The module's one entry point (volume_io.cpp calls it as ReadVdbGrid): reads the grid into *out, or
 // returns 0 with the message in *error. Nothing is thrown across the module boundary.
 extern "C" __attribute__((visibility("default"))) int mfhost_vdb_read_grid(const char* path, const char* grid_name,
                                                                            int centering, mf::VolumeGridData* out,

@@ -128,6 +128,12 @@ impl SurfaceVisitor for Call<'_> {
     }
 }
 
+/// The collision record of a ray that passed to `t` (the other fields zero).
+fn passed(t: f64, stats: mf_track_stats) -> mf_collision {
+    let zero = DVec3::ZERO.into();
+    mf_collision { scattered: false, t, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, local: mf_local_params::NONE, stats }
+}
+
 fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64), seed: u64, tracker: &Tracker<S, F>) -> macrofacet::error::Result<()> {
     let mut stats = TrackStats::default();
     let (origin, d, t_max) = ray;
@@ -135,7 +141,6 @@ fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64), s
     match out {
         Out::FreeFlight(slot) => {
             let flight = tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?;
-            let zero = DVec3::ZERO.into();
             *slot = match flight {
                 TrackedFlight::Scatter { t, point, local } => mf_collision {
                     scattered: true,
@@ -146,15 +151,7 @@ fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64), s
                     local: (&local).into(),
                     stats: stats.into(),
                 },
-                TrackedFlight::Pass => mf_collision {
-                    scattered: false,
-                    t: t_max,
-                    p: zero,
-                    f: 0.0,
-                    frame: mf_frame { normal: zero, tangent: zero },
-                    local: mf_local_params::NONE,
-                    stats: stats.into(),
-                },
+                TrackedFlight::Pass => passed(t_max, stats.into()),
             };
         }
         Out::Transmittance(slot) => {
@@ -282,9 +279,7 @@ pub unsafe extern "C" fn mf_track_free_flight_batch(
     count: usize,
     out_collisions: *mut mf_collision,
 ) -> mf_status {
-    let zero = DVec3::ZERO.into();
-    let blank = mf_collision { scattered: false, t: 0.0, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, local: mf_local_params::NONE, stats: TrackStats::default().into() };
-    track_batch(medium, surface, field, user_data, queries, count, out_collisions, blank, free_flight)
+    track_batch(medium, surface, field, user_data, queries, count, out_collisions, passed(0.0, TrackStats::default().into()), free_flight)
 }
 
 /// Batch form of [`mf_track_transmittance`].

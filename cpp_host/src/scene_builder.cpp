@@ -190,7 +190,8 @@ private:
     std::map<const SceneObject*, std::shared_ptr<const Texture>> textures_;
     std::map<const SceneObject*, std::shared_ptr<const Medium>> media_;
     std::map<const SceneObject*, std::shared_ptr<const MediumParamBag>> bags_;
-    std::set<const SceneObject*> failed_bags_;
+    /// Media and parameter bags whose build failed: reported at their first use, skipped after.
+    std::set<const SceneObject*> failed_;
     /// Macrofacet media with a nested mean surface (add_boundary): the <shape> and the medium.
     std::map<const MediumParamBag*, std::shared_ptr<SceneObject>> mean_surfaces_;
     std::map<const MediumParamBag*, std::shared_ptr<const MacrofacetMedium>> boundary_media_;
@@ -509,11 +510,11 @@ private:
         auto it = bags_.find(&o);
         if (it != bags_.end()) return it->second;
         skip_if_broken(o);
-        if (failed_bags_.count(&o)) throw AlreadyReported{};  // reported at its first use
+        if (failed_.count(&o)) throw AlreadyReported{};  // reported at its first use
         try {
             return build_bag_once(o);
         } catch (const Error&) {
-            failed_bags_.insert(&o);
+            failed_.insert(&o);
             throw;
         }
     }
@@ -574,11 +575,20 @@ private:
         auto it = media_.find(&o);
         if (it != media_.end()) return it->second;
         skip_if_broken(o);
-        if (o.type == "heterogeneous") {
-            auto m = build_heterogeneous(o);
+        if (failed_.count(&o)) throw AlreadyReported{};  // reported at its first use
+        try {
+            auto m = build_medium_once(o);
             media_[&o] = m;
             return m;
+        } catch (const Error&) {
+            failed_.insert(&o);
+            throw;
         }
+    }
+
+    /// A homogeneous or heterogeneous medium (build_medium caches it, or its failure).
+    std::shared_ptr<const Medium> build_medium_once(const SceneObject& o) {
+        if (o.type == "heterogeneous") return build_heterogeneous(o);
         if (o.type != "homogeneous")
             throw err(o, "unsupported medium plugin \"" + o.type + "\" (supported: homogeneous, heterogeneous, macrofacet, gpis)");
         Rgb sigma_t = nonneg_rgb(o, "sigma_t", Rgb(1.0f));
@@ -589,9 +599,7 @@ private:
         o.get_bool("sample_emitters", true);  // accepted; next-event estimation is always used
         std::shared_ptr<PhaseFunction> ph = medium_phase(o);
         o.check_all_used();
-        auto m = std::make_shared<HomogeneousMedium>(sigma_t * scale, albedo, ph);
-        media_[&o] = m;
-        return m;
+        return std::make_shared<HomogeneousMedium>(sigma_t * scale, albedo, ph);
     }
 
     /// The nested <phase> of a medium (isotropic without one).

@@ -192,14 +192,28 @@ impl AreaCell {
     /// [`CELL_LOOSENESS`] of the floor (ceiling): not beyond f32's range, nor deep among its
     /// subnormals.
     fn new(upper: f64, upper_floor: f64, lower: f64, lower_ceiling: f64) -> AreaCell {
-        let up = upper as f32;
-        let up = if f64::from(up) < upper { up.next_up() } else { up };
-        let down = lower as f32;
-        let down = if f64::from(down) > lower { down.next_down() } else { down };
+        let (up, down) = (f32_at_least(upper), -f32_at_least(-lower));
         AreaCell {
             upper: if f64::from(up) <= CELL_LOOSENESS * upper_floor { up } else { f32::INFINITY },
             lower: if lower_ceiling <= CELL_LOOSENESS * f64::from(down) { down } else { f32::NEG_INFINITY },
         }
+    }
+}
+
+/// The smallest f32 `>= x` (NaN stays NaN). By hand: `f32::next_up` needs Rust 1.86, the crate
+/// supports 1.80.
+fn f32_at_least(x: f64) -> f32 {
+    let nearest = x as f32;
+    if !(f64::from(nearest) < x) {
+        return nearest;
+    }
+    // The next f32 up from a finite or −∞ `nearest` below x (bits count away from zero).
+    if nearest == 0.0 {
+        f32::from_bits(1)
+    } else if nearest > 0.0 {
+        f32::from_bits(nearest.to_bits() + 1)
+    } else {
+        f32::from_bits(nearest.to_bits() - 1)
     }
 }
 
@@ -993,6 +1007,23 @@ fn too_many_segments() -> Error {
 mod tests {
     use super::*;
     use crate::ndf::{Beckmann, Ggx, Gpss};
+
+    /// `f32_at_least` is the smallest f32 at or above its argument, across signs, zero, the
+    /// subnormals and the ends of f32's range.
+    #[test]
+    fn f32_at_least_rounds_up_to_the_next_f32() {
+        let mut rng = Pcg32::new(11, 5);
+        let cases = [0.0, -0.0, 1e-50, -1e-50, 1.0, -1.0, 0.1, -0.1, 1e-40, -1e-40, 3.5e38, -3.5e38, 1e300, -1e300, f64::INFINITY, f64::NEG_INFINITY];
+        let random = (0..2000).map(|_| (2.0 * rng.next_f64() - 1.0) * 10f64.powf(90.0 * rng.next_f64() - 45.0));
+        for x in cases.into_iter().chain(random) {
+            let r = f32_at_least(x);
+            assert!(f64::from(r) >= x, "{x:e}: {r:e} is below it");
+            // The f32 just below r is below x: r is the smallest.
+            let below = if r == f32::NEG_INFINITY { r } else if r > 0.0 { f32::from_bits(r.to_bits() - 1) } else if r == 0.0 { -f32::from_bits(1) } else { f32::from_bits(r.to_bits() + 1) };
+            assert!(r == f32::NEG_INFINITY || f64::from(below) < x, "{x:e}: {below:e} below {r:e} is not below it");
+        }
+        assert!(f32_at_least(f64::NAN).is_nan());
+    }
 
     /// The cells' bounds hold over every range of `d·n` they answer (against the projected area
     /// sampled across the range, any azimuth) and stay within [`CELL_LOOSENESS`] of the

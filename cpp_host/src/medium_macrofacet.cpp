@@ -18,40 +18,38 @@ namespace {
 
 mf_frame frame_of(const MediumInteraction& mi) { return mf_frame{to_mf(mi.frame_n), to_mf(mi.frame_t)}; }
 
-/// Slots held by live threads, one bit each (MacrofacetMedium::Tally).
+/// Slots held by live threads, one bit each (MacrofacetMedium::Tally): 64 leasable slots.
 std::atomic<uint64_t> held_tally_slots{0};
+constexpr unsigned kLeasableSlots = 64;
 
 /// A thread's lease on a tally slot: the lowest free one, given back when the thread ends (the
-/// release orders its counts before the next holder's); `slots` (all taken) when none is free.
+/// release orders its counts before the next holder's); kLeasableSlots (the shared slot) when
+/// none is free.
 struct TallyLease {
-    unsigned slot;
-    bool held = false;
-    explicit TallyLease(unsigned slots) : slot(slots) {
+    unsigned slot = kLeasableSlots;
+    TallyLease() {
         uint64_t taken = held_tally_slots.load(std::memory_order_relaxed);
-        for (;;) {
-            const uint64_t free = ~taken & (slots >= 64 ? ~uint64_t(0) : (uint64_t(1) << slots) - 1);
-            if (free == 0) return;
-            const unsigned s = unsigned(__builtin_ctzll(free));
+        while (~taken != 0) {
+            const unsigned s = unsigned(__builtin_ctzll(~taken));
             if (held_tally_slots.compare_exchange_weak(taken, taken | uint64_t(1) << s, std::memory_order_acquire,
                                                        std::memory_order_relaxed)) {
                 slot = s;
-                held = true;
                 return;
             }
         }
     }
     ~TallyLease() {
-        if (held) held_tally_slots.fetch_and(~(uint64_t(1) << slot), std::memory_order_release);
+        if (slot < kLeasableSlots) held_tally_slots.fetch_and(~(uint64_t(1) << slot), std::memory_order_release);
     }
 };
 
-/// This thread's tally slot, out of `slots` (at most 64), or `slots` for the shared one. The
-/// slot is cached in a trivially initialised thread-local (initial-exec: mfhost is linked into
-/// executables), so that the lease's guard and TLS lookup are paid once per thread.
-unsigned tally_slot(unsigned slots) {
+/// This thread's tally slot, or kLeasableSlots for the shared one. The slot is cached in a
+/// trivially initialised thread-local (initial-exec: mfhost is linked into executables), so that
+/// the lease's guard and TLS lookup are paid once per thread.
+unsigned tally_slot() {
     static thread_local unsigned cached __attribute__((tls_model("initial-exec"))) = ~0u;
     if (cached == ~0u) {
-        thread_local const TallyLease lease(slots);
+        thread_local const TallyLease lease;
         cached = lease.slot;
     }
     return cached;
@@ -135,7 +133,8 @@ MacrofacetMedium::~MacrofacetMedium() {
 unsigned tally_slots_held() { return unsigned(__builtin_popcountll(held_tally_slots.load())); }
 
 void MacrofacetMedium::count(const mf_track_stats& s) const {
-    const unsigned slot = tally_slot(kTallySlots);
+    static_assert(kTallySlots == kLeasableSlots, "one slot per bit of held_tally_slots, and the shared one after them");
+    const unsigned slot = tally_slot();
     Tally& t = tallies_[slot];
     auto add = [own = slot < kTallySlots](std::atomic<uint64_t>& to, uint64_t n) {
         if (own)  // this thread's own slot: the only writer

@@ -13,7 +13,6 @@ use macrofacet::frame::Frame;
 use macrofacet::surface::SurfacePoint;
 use macrofacet::{MacrofacetMedium, PHASE_SAMPLE_DIMENSIONS};
 use glam::{DMat3, DVec3};
-use std::borrow::Cow;
 use std::ffi::c_void;
 
 /// [`mf_local_params::set`] / [`mf_param_bounds::set`]: `sigma` is given.
@@ -225,15 +224,16 @@ pub unsafe extern "C" fn mf_field_free(field: *mut mf_field) {
     free_handle(field);
 }
 
-/// The medium at an event with local parameters; without them (NULL) the medium itself, borrowed
-/// (it is 736 bytes, and the phase calls of a stationary medium are their hot path).
-fn localized<'m>(m: &'m MacrofacetMedium, local: *const mf_local_params, frame: &Frame) -> FfiResult<Cow<'m, MacrofacetMedium>> {
+/// The medium at an event with local parameters, built in `slot`; without them (NULL) the medium
+/// itself, borrowed. (A slot, not a returned `Cow`: the medium is 736 bytes, and moving a result
+/// holding it cost every phase call of a stationary medium, their hot path, a copy.)
+fn localized<'m>(m: &'m MacrofacetMedium, local: *const mf_local_params, frame: &Frame, slot: &'m mut Option<MacrofacetMedium>) -> FfiResult<&'m MacrofacetMedium> {
     if local.is_null() {
-        return Ok(Cow::Borrowed(m));
+        return Ok(m);
     }
     // SAFETY: non-NULL, and the caller promises a valid mf_local_params.
     let local = LocalParams::try_from(unsafe { &*local })?;
-    Ok(Cow::Owned(m.localized(&local, frame)?))
+    Ok(slot.insert(m.localized(&local, frame)?))
 }
 
 /// [`super::medium::mf_phase_sample`] at an event whose local parameters are `*local` (as a
@@ -254,10 +254,11 @@ pub unsafe extern "C" fn mf_phase_sample_local(
         let m = arg(medium, "medium")?;
         let first = arg(u, "u")?;
         let fr = frame(arg(frame_, "frame")?)?;
-        let medium = localized(&m.inner, local, &fr)?;
+        let mut slot = None;
+        let medium = localized(&m.inner, local, &fr, &mut slot)?;
         // SAFETY: the caller promises MF_PHASE_SAMPLE_DIMENSIONS readable doubles at `u`.
         let u: [f64; PHASE_SAMPLE_DIMENSIONS] = unsafe { std::slice::from_raw_parts(first, PHASE_SAMPLE_DIMENSIONS) }.try_into().expect("length");
-        let result = phase_sample_with(&medium, &fr, wi, u)?;
+        let result = phase_sample_with(medium, &fr, wi, u)?;
         *out(out_sample, "out_sample")? = result;
         Ok(())
     })
@@ -280,7 +281,8 @@ pub unsafe extern "C" fn mf_phase_eval_pdf_local(
     boundary(|| {
         let m = arg(medium, "medium")?;
         let fr = frame(arg(frame_, "frame")?)?;
-        let medium = localized(&m.inner, local, &fr)?;
+        let mut slot = None;
+        let medium = localized(&m.inner, local, &fr, &mut slot)?;
         let (wi, wo) = (local_direction(&fr, "wi", wi)?, local_direction(&fr, "wo", wo)?);
         let (value, pdf) = medium.phase.eval_pdf(wi, wo);
         *out(out_value, "out_value")? = mf_phase_value { value: rgb(value), pdf };

@@ -163,23 +163,28 @@ impl Aabb {
     pub fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
         let (mut lo, mut hi) = (t0, t1);
         for a in 0..3 {
-            let (bmin, bmax) = (self.min[a], self.max[a]);
-            if bmin == f64::NEG_INFINITY && bmax == f64::INFINITY {
-                continue;
-            }
-            if d[a] == 0.0 {
-                if o[a] < bmin || o[a] > bmax {
+            let (bmin, bmax, oa, da) = (self.min[a], self.max[a], o[a], d[a]);
+            // (An unbounded axis never rejects: o is finite.)
+            if da == 0.0 {
+                if oa < bmin || oa > bmax {
                     return None;
                 }
                 continue;
             }
-            let inv = 1.0 / d[a];
-            let (mut ta, mut tb) = ((bmin - o[a]) * inv, (bmax - o[a]) * inv);
-            if ta > tb {
-                std::mem::swap(&mut ta, &mut tb);
+            if bmin == f64::NEG_INFINITY && bmax == f64::INFINITY {
+                continue;
             }
-            lo = lo.max(ta);
-            hi = hi.min(tb);
+            let inv = 1.0 / da;
+            let (ta, tb) = ((bmin - oa) * inv, (bmax - oa) * inv);
+            // Entry and exit by the sign of d; comparisons that leave lo and hi alone when a
+            // product is NaN (a subnormal d whose inverse overflows, at a face).
+            let (near, far) = if inv > 0.0 { (ta, tb) } else { (tb, ta) };
+            if near > lo {
+                lo = near;
+            }
+            if far < hi {
+                hi = far;
+            }
         }
         (lo <= hi).then_some((lo, hi))
     }
@@ -259,4 +264,78 @@ pub trait MeanSurface {
     /// is a signed distance, the box grown by `top` contains the medium's region `f < top`.
     /// [`Aabb::EVERYTHING`] when the interior is unbounded.
     fn bounding_box(&self) -> Aabb;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Aabb;
+    use crate::rng::Pcg32;
+    use glam::DVec3;
+
+    /// The slab test written plainly (as `clip` was): per bounded axis, the sorted interval of `t`.
+    fn clip_reference(b: &Aabb, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (t0, t1);
+        for a in 0..3 {
+            if b.min[a] == f64::NEG_INFINITY && b.max[a] == f64::INFINITY {
+                continue;
+            }
+            if d[a] == 0.0 {
+                if o[a] < b.min[a] || o[a] > b.max[a] {
+                    return None;
+                }
+                continue;
+            }
+            let inv = 1.0 / d[a];
+            let (mut ta, mut tb) = ((b.min[a] - o[a]) * inv, (b.max[a] - o[a]) * inv);
+            if ta > tb {
+                std::mem::swap(&mut ta, &mut tb);
+            }
+            lo = lo.max(ta);
+            hi = hi.min(tb);
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
+
+    #[test]
+    fn clip_agrees_with_the_plain_slab_test() {
+        let mut rng = Pcg32::new(7, 11);
+        let mut u = move || 2.0 * rng.next_f64() - 1.0;
+        let boxes = [
+            Aabb { min: DVec3::new(-1.0, -2.0, -0.5), max: DVec3::new(1.0, 0.5, 3.0) },
+            Aabb { min: DVec3::new(f64::NEG_INFINITY, -1.0, f64::NEG_INFINITY), max: DVec3::new(f64::INFINITY, 1.0, f64::INFINITY) },
+            Aabb::EVERYTHING,
+        ];
+        let (mut hits, mut misses) = (0, 0);
+        for b in &boxes {
+            for i in 0..4000 {
+                let o = 3.0 * DVec3::new(u(), u(), u());
+                let mut d = DVec3::new(u(), u(), u());
+                // Axis-parallel rays, and rays along the box's faces.
+                if i % 5 == 0 {
+                    d.x = 0.0;
+                }
+                if i % 7 == 0 {
+                    d.y = 0.0;
+                }
+                let d = d.normalize_or(DVec3::Z);
+                let o = if i % 11 == 0 && b.min.x.is_finite() { DVec3::new(b.min.x, o.y, o.z) } else { o };
+                let (t0, t1) = if i % 3 == 0 { (0.0, f64::INFINITY) } else { (0.0, 2.0 * u().abs()) };
+                let (got, want) = (b.clip(o, d, t0, t1), clip_reference(b, o, d, t0, t1));
+                assert_eq!(got, want, "box {b:?}, o {o}, d {d}, [{t0}, {t1}]");
+                if got.is_some() {
+                    hits += 1;
+                } else {
+                    misses += 1;
+                }
+            }
+        }
+        assert!(hits > 1000 && misses > 1000, "{hits} hits, {misses} misses: the cases must exercise both");
+        // A ray on a face with a subnormal component along its normal: the inverse overflows, the
+        // face's product is NaN (0 × ∞), which must not close the interval: the ray stays on the
+        // closed box's face.
+        let b = &boxes[0];
+        let (o, d) = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(f64::MIN_POSITIVE / 4.0, 0.6, 0.8));
+        assert_eq!(b.clip(o, d, 0.0, 10.0), Some((0.0, 0.5 / 0.6)));
+        assert_eq!(b.clip(o, d, 0.0, 10.0), clip_reference(b, o, d, 0.0, 10.0));
+    }
 }

@@ -1,26 +1,60 @@
 #!/usr/bin/env bash
 # Speed figures (never asserted by tests): the core's per-call costs and mfrender on the design
 # notes' Mitsuba 3 anchor scenes (bench/anchor.xml), printed beside Mitsuba 3.9.1's times on the
-# same 2-core machine kind. Usage: scripts/bench.sh [--quick]   (--quick: 128x128, 16 spp)
+# same 2-core machine kind. Usage: scripts/bench.sh [--quick | --instructions]
+#   --quick         128x128, 16 spp
+#   --instructions  only the tracking targets' pairs, as instruction counts of mfrender's rendering
+#                   loop under callgrind (valgrind): steady where shared machines make seconds vary
+#                   by +-15 %; small images, ~2 min (docs/performance.md)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 scripts/setup.sh
+mode="${1:-}"
+case "$mode" in ""|--quick|--instructions) ;; *) echo "usage: scripts/bench.sh [--quick | --instructions]" >&2; exit 2 ;; esac
+
+build_dir=build/bench
+build_mfrender() {
+    cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMF_BUILD_TESTS=OFF >/dev/null
+    cmake --build "$build_dir" -j "$(nproc)" --target mfrender >/dev/null
+    mfrender="$(find "$build_dir" -name mfrender -type f -perm -u+x | head -n 1)"
+}
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+
+if [ "$mode" = "--instructions" ]; then
+    command -v valgrind >/dev/null || { echo "scripts/bench.sh --instructions needs valgrind (sudo apt-get install valgrind)" >&2; exit 1; }
+    build_mfrender
+    instructions() {  # ARGS...: instructions of PathIntegrator::Li and everything it calls, 1 thread
+        valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" --toggle-collect='*PathIntegrator::Li*' \
+            "$mfrender" "$@" --threads 1 --quiet -o "$out/cg.exr" >/dev/null 2>&1
+        awk '/^summary:/ { print $2 }' "$out/cg.out"
+    }
+    instruction_ratio() {  # LABEL "ARGS A" "ARGS B"
+        local a b
+        a=$(instructions $2); b=$(instructions $3)
+        printf '%-58s %6.2fx   (A %.1f M, B %.1f M instructions)\n' "$1" "$(awk -v x="$a" -v y="$b" 'BEGIN { print x / y }')" \
+            "$(awk -v x="$a" 'BEGIN { print x / 1e6 }')" "$(awk -v y="$b" 'BEGIN { print y / 1e6 }')"
+    }
+    r="bench/anchor.xml -D res=64 -D spp=8"
+    echo "== tracking targets as instruction ratios (callgrind, 1 thread; anchor 64x64/8 spp, gpis_compare 32x32/8 spp)"
+    instruction_ratio "sphere thin shell / roughconductor (target <= 1.5)" "$r -D object=macrofacet" "$r -D object=roughconductor"
+    instruction_ratio "torus thin shell / roughconductor (target <= 2)" "$r -D object=torus_macrofacet" "$r -D object=torus_roughconductor"
+    instruction_ratio "torus thin shell, sigma varying +-20 % / stationary" "$r -D object=torus_varying" "$r -D object=torus_macrofacet"
+    g="bench/gpis_compare.xml -D res=32 -D spp=8"
+    instruction_ratio "gpis / macrofacet at equal spp (target >= 10)" "$g -D method=gpis" "$g -D method=macrofacet"
+    exit 0
+fi
 
 echo "== core queries (cargo run --release -p macrofacet --example bench_core)"
 cargo run --release --quiet -p macrofacet --example bench_core
 echo "== varying parameters: gpis vs macrofacet (cargo run --release -p macrofacet --example bench_core fields)"
 cargo run --release --quiet -p macrofacet --example bench_core fields
 
-build_dir=build/bench
-cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMF_BUILD_TESTS=OFF >/dev/null
-cmake --build "$build_dir" -j "$(nproc)" --target mfrender >/dev/null
-mfrender="$(find "$build_dir" -name mfrender -type f -perm -u+x | head -n 1)"
+build_mfrender
 
 res=512 spp=64
-if [ "${1:-}" = "--quick" ]; then res=128 spp=16; fi
-out="$(mktemp -d)"
-trap 'rm -rf "$out"' EXIT
+if [ "$mode" = "--quick" ]; then res=128 spp=16; fi
 declare -A mitsuba=([homogeneous]="scalar_rgb 10.5 s, llvm_ad_rgb 7.0 s" [roughconductor]="scalar_rgb 5.5 s, llvm_ad_rgb 1.45 s" [macrofacet]="(no Mitsuba counterpart)")
 echo "== mfrender on bench/anchor.xml, ${res}x${res} at ${spp} spp, $(nproc) threads"
 for object in homogeneous roughconductor macrofacet; do

@@ -26,13 +26,19 @@ if [ "$mode" = "--instructions" ]; then
     command -v valgrind >/dev/null || { echo "scripts/bench.sh --instructions needs valgrind (sudo apt-get install valgrind)" >&2; exit 1; }
     build_mfrender
     instructions() {  # ARGS...: instructions of PathIntegrator::Li and everything it calls, 1 thread
-        valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" --toggle-collect='*PathIntegrator::Li*' \
-            "$mfrender" "$@" --threads 1 --quiet -o "$out/cg.exr" >/dev/null 2>&1
+        rm -f "$out/cg.out"
+        if ! valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" --toggle-collect='*PathIntegrator::Li*' \
+            "$mfrender" "$@" --threads 1 --quiet -o "$out/cg.exr" >"$out/cg.log" 2>&1; then
+            echo "scripts/bench.sh: mfrender $* failed under callgrind:" >&2
+            grep -v "^==" "$out/cg.log" | tail -n 5 >&2
+            return 1
+        fi
         awk '/^summary:/ { print $2 }' "$out/cg.out"
     }
     instruction_ratio() {  # LABEL "ARGS A" "ARGS B"
         local a b
-        a=$(instructions $2); b=$(instructions $3)
+        a=$(instructions $2) || exit 1
+        b=$(instructions $3) || exit 1
         printf '%-58s %6.2fx   (A %.1f M, B %.1f M instructions)\n' "$1" "$(awk -v x="$a" -v y="$b" 'BEGIN { print x / y }')" \
             "$(awk -v x="$a" 'BEGIN { print x / 1e6 }')" "$(awk -v y="$b" 'BEGIN { print y / 1e6 }')"
     }

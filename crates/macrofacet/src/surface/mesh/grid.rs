@@ -174,6 +174,9 @@ impl CellGrid {
         if self.list_at(p + length * d).is_none() {
             return false;
         }
+        // Room for the lists of a few cells at once: the caller's vector starts empty with each
+        // tracking call, and growing it by doubling took five reallocations.
+        out.reserve(4 * MAX_LIST);
         let step = IVec3::new(sign(d.x), sign(d.y), sign(d.z));
         let rel = (p - self.origin) / self.h;
         // Parameter of the next cell boundary along each axis, and between boundaries.

@@ -213,32 +213,38 @@ impl CellGrid {
     }
 }
 
-/// Slots of [`sort_distinct`]'s table (a power of two; 1 KiB on the stack).
+/// Slots of [`drop_repeats`]'s table (a power of two; 1 KiB on the stack).
 const DISTINCT_SLOTS: usize = 256;
 
-/// Unions up to this long are sorted as they are: below it the table's 1 KiB cost more than
+/// Unions up to this long are sorted as they are: below it [`drop_repeats`]'s 1 KiB cost more than
 /// the repeats (the torus anchor's thin shell ran 0.2 % more instructions with the table for all).
 const SHORT_UNION: usize = 64;
 
-/// Where [`sort_distinct`] first looks for `x`: Fibonacci hashing, the top bits of `x` times
+/// Where [`drop_repeats`] first looks for `x`: Fibonacci hashing, the top bits of `x` times
 /// `2^32/φ`.
 #[inline]
 fn distinct_slot(x: u32) -> usize {
     (x.wrapping_mul(0x9E37_79B9) >> (32 - DISTINCT_SLOTS.trailing_zeros())) as usize
 }
 
-/// `v` sorted with its repeats removed, as `sort_unstable` and `dedup` leave it. A segment's
-/// union repeats most triangles (neighbouring cells share them): the repeats are dropped first
-/// by an open-addressing table, so that only the distinct ones are sorted (sorting ~150
-/// entries, most of them repeats, was 6 % of a thin mesh shell's rendering). Short unions, and
-/// those with more than half the table's slots distinct, take the plain sort.
+/// `v` sorted with its repeats removed (`sort_unstable` and `dedup`). A segment's union repeats
+/// most triangles (neighbouring cells share them): a long one drops its repeats first
+/// ([`drop_repeats`]), so that only the distinct ones are sorted (sorting ~150 entries, most of
+/// them repeats, was 6 % of a thin mesh shell's rendering).
 fn sort_distinct(v: &mut Vec<u32>) {
-    const EMPTY: u32 = u32::MAX; // never a triangle: indices are below the triangle count
-    if v.len() <= SHORT_UNION {
-        v.sort_unstable();
-        v.dedup();
-        return;
+    if v.len() > SHORT_UNION {
+        drop_repeats(v);
     }
+    v.sort_unstable();
+    v.dedup();
+}
+
+/// Drops the repeats of `v` through an open-addressing table, keeping each value's first
+/// occurrence in place of the entries already read. With more than half the table's slots
+/// taken it stops, `v` still holding every value (the entries before the current one are kept
+/// values or repeats of them, the rest unread).
+fn drop_repeats(v: &mut Vec<u32>) {
+    const EMPTY: u32 = u32::MAX; // never a triangle: indices are below the triangle count
     let mut table = [EMPTY; DISTINCT_SLOTS];
     let mut kept = 0;
     for k in 0..v.len() {
@@ -258,15 +264,10 @@ fn sort_distinct(v: &mut Vec<u32>) {
             slot = (slot + 1) & (DISTINCT_SLOTS - 1);
         }
         if 2 * kept > DISTINCT_SLOTS {
-            // Every entry before k + 1 is now one of v[..kept], and the rest are unread: the
-            // plain sort of the whole gives the same result.
-            v.sort_unstable();
-            v.dedup();
             return;
         }
     }
     v.truncate(kept);
-    v.sort_unstable();
 }
 
 fn sign(x: f64) -> i32 {

@@ -4,7 +4,8 @@
 # Optional extras, only when asked:
 #   MF_SETUP_FUZZ=1     clang-14 + libclang-rt-14-dev (libFuzzer: scripts/fuzz_scene.sh)
 #   MF_SETUP_MITSUBA=1  Mitsuba 3.9.1 and nanobind 2.14.0 (headers) from PyPI: the Mitsuba plugin
-#                       (mitsuba_plugin/) and the Mitsuba comparison tests
+#                       (mitsuba_plugin/) and the Mitsuba comparison tests (scripts/test.sh asks
+#                       for them unless MF_SETUP_MITSUBA=0)
 #   MF_SETUP_SLURM=1    slurm-wlm + munge (scripts/slurm_local_test.sh)
 set -euo pipefail
 
@@ -44,7 +45,7 @@ if [ "${MF_SETUP_MITSUBA:-0}" = 1 ]; then
         name=${pin%%==*} version=${pin##*==}
         if ! python3 -c "import $name, sys; sys.exit($name.__version__ != '$version')" 2>/dev/null; then
             echo "setup: installing $pin (pip)" >&2
-            python3 -m pip install --quiet "$pin"
+            python3 -m pip install --quiet --root-user-action=ignore "$pin"
         fi
     done
 fi

@@ -64,6 +64,11 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     int null_crossings = 0;
     MediumInteraction last_event;    // the last scattering event in a medium
     bool from_medium_event = false;  // ... and the current ray leaves it (the medium's `from`)
+    // The nearest collision of a bounce and each medium's candidate, built once per path, not per
+    // bounce (zeroing two 264-byte records per ray cost 2.5 % of a thin shell's render): a record
+    // is read only after a flight that scattered wrote it, and each medium writes what its phase
+    // function and its own `from` read (medium.h).
+    MediumInteraction mi, mi_m;
 
     // MIS weights of the two ways to reach a non-delta emitter from a non-delta vertex
     // (LightSampling): next-event estimation (light_pdf) and BSDF / phase sampling (scatter_pdf).
@@ -119,14 +124,12 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         const MediumInteraction* from = from_medium_event ? &last_event : nullptr;
         from_medium_event = false;
         if (vol && (medium || !scene_.superposed_media().empty())) {
-            MediumInteraction mi;
             Rgb w(1.0f), pr(1.0f);
             float tmax = found ? hit.t : kInf;
             const Medium* scattering = nullptr;
             // One medium's flight (a Medium or a SuperposedMedium) up to the nearest collision so
             // far; `from` goes to the medium whose event the ray leaves.
             auto fly = [&](const auto& flight, const Medium* owner) {
-                MediumInteraction mi_m;
                 Rgb w_m, pr_m;
                 if (flight.sample_free_flight(ray, tmax, from && from->medium == owner ? from : nullptr, hero, sampler, &mi_m, &w_m, &pr_m)) {
                     mi = mi_m;

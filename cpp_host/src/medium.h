@@ -89,6 +89,8 @@ public:
     virtual ~Medium() = default;
     /// Free-flight sampling along ray (|d| = 1) over [0, t_max] (t_max may be +inf).
     /// Returns true and fills *mi on a real scattering event; false if the flight passed t_max.
+    /// *mi is reused across bounces: the medium writes every field its phase function and its
+    /// own `from` read (t, p, wo and medium always), whatever an earlier event left there.
     /// `from` is the event of this path the ray leaves (the previous vertex, when it was a
     /// scattering event in a medium: the ray starts at from->p), else null (the camera, a surface,
     /// a boundary crossing). Media without memory ignore it.

@@ -355,10 +355,10 @@ TEST_CASE(field_refusals_name_file_and_line) {
                       "fields.xml:6: <volume type=\"gridvolume\">: parameter \"filename\" refers to a missing file");
     {
         std::string bytes = read_file(work("alpha.vol"));
-        write_file(work("truncated.vol"), bytes.substr(0, bytes.size() - 8));
+        write_file(work("fields_truncated.vol"), bytes.substr(0, bytes.size() - 8));
     }
-    CHECK_THROWS_WITH(fails(s + grid_volume("alpha", "truncated.vol")), "fields.xml:6: <volume type=\"gridvolume\">: volume file");
-    CHECK_THROWS_WITH(fails(s + grid_volume("alpha", "truncated.vol")), "the file is truncated");
+    CHECK_THROWS_WITH(fails(s + grid_volume("alpha", "fields_truncated.vol")), "fields.xml:6: <volume type=\"gridvolume\">: volume file");
+    CHECK_THROWS_WITH(fails(s + grid_volume("alpha", "fields_truncated.vol")), "the file is truncated");
     write_file(work("corrupt.vol"), "VOX" + read_file(work("alpha.vol")).substr(3));
     CHECK_THROWS_WITH(fails(s + grid_volume("alpha", "corrupt.vol")), "is not a Mitsuba volume");
     write_file(work("notvdb.vdb"), "garbage");

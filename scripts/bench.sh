@@ -9,13 +9,18 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
+# As scripts/test.sh: Mitsuba 3.9.1 and nanobind (pinned, PyPI) for the plugin's figures, unless
+# MF_SETUP_MITSUBA=0.
+export MF_SETUP_MITSUBA=${MF_SETUP_MITSUBA:-1}
 scripts/setup.sh
+plugin=()
+if [ "$MF_SETUP_MITSUBA" = 1 ]; then plugin=(-DMF_BUILD_MITSUBA_PLUGIN=ON); fi
 mode="${1:-}"
 case "$mode" in ""|--quick|--instructions) ;; *) echo "usage: scripts/bench.sh [--quick | --instructions]" >&2; exit 2 ;; esac
 
 build_dir=build/bench
 build_mfrender() {
-    cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMF_BUILD_TESTS=OFF >/dev/null
+    cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DMF_BUILD_TESTS=OFF "${plugin[@]}" >/dev/null
     cmake --build "$build_dir" -j "$(nproc)" --target mfrender >/dev/null
     mfrender="$(find "$build_dir" -name mfrender -type f -perm -u+x | head -n 1)"
 }
@@ -101,11 +106,11 @@ echo "default scene (480x270, 20 spp, $(nproc) threads): $(awk -v a="$start" -v 
 
 # The Mitsuba 3 plugin: the thin gold shell as a macrofacet medium vs the same sphere as
 # Mitsuba's roughconductor, both scalar_rgb, equal spp, one process (where the plugin is built:
-# python3 finds mitsuba 3.9.1 and nanobind; MF_SETUP_MITSUBA=1 scripts/setup.sh installs them).
+# python3 finds mitsuba 3.9.1 and nanobind, which this script installs unless MF_SETUP_MITSUBA=0).
 if grep -q "^MF_BUILD_MITSUBA_PLUGIN:BOOL=ON" "$build_dir/CMakeCache.txt"; then
     cmake --build "$build_dir" -j "$(nproc)" --target macrofacet_mitsuba >/dev/null
     echo "== Mitsuba 3.9.1 with the macrofacet plugin, bench/anchor.xml, ${res}x${res} at ${spp} spp, $(nproc) threads"
     PYTHONPATH="$build_dir/mitsuba" python3 scripts/bench_mitsuba.py "$res" "$spp"
 else
-    echo "== Mitsuba plugin benchmark skipped: the plugin is not built (MF_SETUP_MITSUBA=1 scripts/setup.sh installs Mitsuba 3.9.1 and nanobind)"
+    echo "== Mitsuba plugin benchmark skipped: the plugin is not built (MF_SETUP_MITSUBA=0)"
 fi

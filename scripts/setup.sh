@@ -2,7 +2,8 @@
 # Installs what building and testing macrofacet needs on Debian 12, only what is missing:
 # the Debian packages of the C/C++ side and the pinned cbindgen. Safe to run repeatedly.
 # Optional extras, only when asked:
-#   MF_SETUP_FUZZ=1     clang-14 + libclang-rt-14-dev (libFuzzer: scripts/fuzz_scene.sh)
+#   MF_SETUP_FUZZ=1     clang-14 + libclang-rt-14-dev (libFuzzer: scripts/fuzz_scene.sh; scripts/test.sh
+#                       asks for them unless MF_SETUP_FUZZ=0)
 #   MF_SETUP_MITSUBA=1  Mitsuba 3.9.1 and nanobind 2.14.0 (headers) from PyPI: the Mitsuba plugin
 #                       (mitsuba_plugin/) and the Mitsuba comparison tests (scripts/test.sh asks
 #                       for them unless MF_SETUP_MITSUBA=0)

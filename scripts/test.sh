@@ -8,10 +8,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 
-# Every test includes the Mitsuba 3 plugin's: setup installs the pinned Mitsuba 3.9.1 and nanobind
-# from PyPI when they are missing, and the plugin is built (MF_SETUP_MITSUBA=0 skips both; its
-# tests then report themselves skipped with the reason).
-export MF_SETUP_MITSUBA=${MF_SETUP_MITSUBA:-1}
+# Every test includes the Mitsuba 3 plugin's and the scene reader's fuzz smoke: setup installs the
+# pinned Mitsuba 3.9.1 and nanobind from PyPI, and clang-14 with libclang-rt-14-dev from Debian,
+# when they are missing, and the plugin is built (MF_SETUP_MITSUBA=0 skips the plugin, whose tests
+# then report themselves skipped with the reason; MF_SETUP_FUZZ=0 skips the fuzz smoke).
+export MF_SETUP_MITSUBA=${MF_SETUP_MITSUBA:-1} MF_SETUP_FUZZ=${MF_SETUP_FUZZ:-1}
 scripts/setup.sh
 plugin=()
 if [ "$MF_SETUP_MITSUBA" = 1 ]; then plugin=(-DMF_BUILD_MITSUBA_PLUGIN=ON); fi
@@ -31,10 +32,9 @@ cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release "${plugin[@]}" >/dev/null
 cmake --build "$build_dir" -j "$(nproc)"
 ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)"
 
-# A bounded smoke of the scene-reader fuzzer (libFuzzer, ASan + UBSan): scripts/fuzz_scene.sh
-# installs clang-14 and libclang-rt-14-dev from Debian when they are missing (MF_SETUP_FUZZ=0
-# skips the smoke; the long run is scripts/fuzz_scene.sh SECONDS).
-if [ "${MF_SETUP_FUZZ:-1}" = 1 ]; then
+# A bounded smoke of the scene-reader fuzzer (libFuzzer, ASan + UBSan; the long run is
+# scripts/fuzz_scene.sh SECONDS).
+if [ "$MF_SETUP_FUZZ" = 1 ]; then
     echo "== fuzz smoke (scene reader, 20 s)" >&2
     scripts/fuzz_scene.sh 20
 else

@@ -6,10 +6,10 @@ namespace mf {
 namespace {
 constexpr int kMaxNullCrossings = 1024;
 
-/// A thread's medium-event records, reused from path to path and bounce to bounce (building three
-/// 264-byte records per path and two per bounce cost a thin shell's render 2.5 %): a record is read
-/// only after a flight that scattered wrote it (Medium::sample_free_flight says what it writes),
-/// the last event only when the ray leaves one.
+/// A thread's medium-event records, reused from path to path and bounce to bounce (building one
+/// 264-byte record per path and two per bounce cost a thin shell's render about 2 %): a record is
+/// read only after a flight that scattered wrote it (Medium::sample_free_flight says what it
+/// writes), the last event only when the ray leaves one.
 struct EventRecords {
     MediumInteraction last_event;  // the last scattering event in a medium
     MediumInteraction nearest;     // a bounce's nearest collision so far

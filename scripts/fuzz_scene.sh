@@ -2,20 +2,17 @@
 # Coverage-guided fuzzing of mfrender's scene reader with libFuzzer (clang, ASan + UBSan):
 #   scripts/fuzz_scene.sh [SECONDS]     (default 60; scripts/test.sh runs a 20 s smoke)
 # Builds cpp_host/fuzz/fuzz_scene in build/fuzz with clang++-14 (Debian: clang-14,
-# libclang-rt-14-dev; installed when missing), starts from the committed seed corpus
-# cpp_host/fuzz/corpus (read only) plus a working corpus in build/fuzz/corpus, and writes any
-# crashing input to build/fuzz/artifacts/. Exit status non-zero on a finding. Prints the
+# libclang-rt-14-dev; scripts/setup.sh installs them when missing), starts from the committed
+# seed corpus cpp_host/fuzz/corpus (read only) plus a working corpus in build/fuzz/corpus, and
+# writes any crashing input to build/fuzz/artifacts/. Exit status non-zero on a finding. Prints the
 # number of executions.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:-60}
 [[ $seconds =~ ^[0-9]+$ ]] || { echo "usage: $0 [SECONDS]" >&2; exit 2; }
 export PATH="$HOME/.cargo/bin:$PATH"
-if ! command -v clang++-14 >/dev/null || ! dpkg-query -W -f='${Status}' libclang-rt-14-dev 2>/dev/null | grep -q "install ok installed"; then
-    sudo=""; [ "$(id -u)" -eq 0 ] || sudo=sudo
-    $sudo apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends clang-14 libclang-rt-14-dev >/dev/null
-fi
+# The project's packages and clang-14 with libclang-rt-14-dev, where missing (one install path).
+MF_SETUP_FUZZ=1 "$root/scripts/setup.sh"
 build=$root/build/fuzz
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 \
     -DCMAKE_CXX_COMPILER=clang++-14 -DMFHOST_FUZZ=ON >/dev/null

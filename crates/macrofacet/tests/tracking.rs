@@ -311,6 +311,27 @@ fn meshes_with_sharp_and_reflex_edges_and_a_smooth_torus() {
 }
 
 #[test]
+fn thin_shell_across_the_edges_of_a_torus_mesh() {
+    // A thin shell (σ well below the edges' zones, `surface/mesh/edge.rs`) on a smooth torus,
+    // with its vertex normals and flat: segments that cross an edge where no face region
+    // certifies them take the dihedral bound of the edge's two triangles.
+    let m = medium(Ndf::Gpss(Gpss::new(0.3, 0.3, 0.15).unwrap()), 0.002);
+    let mesh = meshes::torus(1.0, 0.4, 32, 16);
+    let smooth = mesh_surface(&mesh);
+    let flat = mesh_surface(&Mesh { normals: None, ..mesh });
+    let cases = vec![
+        ray("oblique", DVec3::new(-2.0, -2.0, 2.0), DVec3::new(1.0, 0.3, 0.0), 6.0),
+        ray("grazing_top", DVec3::new(-3.0, 0.05, 0.4), DVec3::new(3.0, 0.05, 0.4), 7.0),
+        ray("inner_rim", DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.6, 0.0, 0.0), 3.0),
+    ];
+    for (k, (name, surface)) in [("smooth torus", &smooth), ("flat torus", &flat)].into_iter().enumerate() {
+        let (failures, stats) = check_surface(name, &m, surface, &cases, 2000, sidak_alpha(0.01, 6 * cases.len()), 53 + k as u64);
+        assert_eq!(stats.majorant_violations, 0, "{name}: majorant violated");
+        assert_eq!(failures, 0);
+    }
+}
+
+#[test]
 fn thick_shell_around_a_torus_restarts_without_bias() {
     // A volume-like shell (isotropic gpss, σ = a fifth of the tube's radius, as the default
     // scene's third torus): away from the certified regions the mesh bounds segments by the

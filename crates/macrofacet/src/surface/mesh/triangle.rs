@@ -175,14 +175,16 @@ pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest
     make(a + ab * v + ac * w, DVec3::new(1.0 - v - w, v, w), Feature::Face)
 }
 
+/// A triangle with its normal from the winding (zero for a degenerate one), for tests.
+#[cfg(test)]
+pub(super) fn from_corners(p: [DVec3; 3]) -> Triangle {
+    Triangle::new(p, (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::rng::Pcg32;
-
-    fn triangle(p: [DVec3; 3]) -> Triangle {
-        Triangle::new(p, (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO))
-    }
 
     #[test]
     fn pruning_never_drops_a_triangle_at_the_search_distance() {
@@ -198,7 +200,7 @@ mod tests {
             if k % 7 == 0 {
                 corners[2] = corners[0] + 1e-9 * (corners[1] - corners[0]); // a sliver
             }
-            let t = triangle(corners);
+            let t = from_corners(corners);
             let mut p = origin + uniform(size * [1e-9, 1e-3, 1.0, 10.0][k / 9 % 4]);
             if k % 5 == 0 && t.n != DVec3::ZERO {
                 p -= t.n.dot(p - t.p[0]) * t.n; // on the plane, up to rounding

@@ -23,7 +23,7 @@ const MARGINS: [f64; LEVELS] = [0.1, 0.25];
 const LEVELS: usize = 2;
 /// The zones' radii stop at this many edge lengths (a thin shell's crossings need far less, and
 /// the competitors searched stay few).
-const MAX_RADIUS_EDGES: f64 = 0.25;
+const MAX_RADIUS_EDGES: f64 = 0.125;
 
 /// The zone of one edge of one triangle.
 #[derive(Clone, Copy, Debug)]
@@ -93,12 +93,21 @@ impl EdgeZone {
     fn radii(bvh: &Bvh, triangles: &[Triangle], i: u32, k: usize, j: u32, epsilon: f64, near: &mut Vec<u32>) -> [f64; LEVELS] {
         let t = &triangles[i as usize];
         let cap = MAX_RADIUS_EDGES * (t.p[(k + 1) % 3] - t.p[k]).length();
+        // Every triangle within 2 cap of a middle part lies within this of the edge's midpoint
+        // (the parts share it; the first margin's is the longest).
+        let (s0, s1) = middle(t, k, 0);
+        let complete = bvh.within(triangles, 0.5 * (s0 + s1), 0.5 * (s1 - s0).length() + 2.0 * cap, usize::MAX, near);
+        debug_assert!(complete);
         std::array::from_fn(|level| {
             let (s0, s1) = middle(t, k, level);
-            // Every triangle within 2 cap of S lies within this of its midpoint.
-            let complete = bvh.within(triangles, 0.5 * (s0 + s1), 0.5 * (s1 - s0).length() + 2.0 * cap, usize::MAX, near);
-            debug_assert!(complete);
-            let gap = near.iter().filter(|&&o| o != i && o != j).map(|&o| segment_distance(&triangles[o as usize], s0, s1)).fold(2.0 * cap, f64::min);
+            let mut gap = 2.0 * cap;
+            for &o in near.iter().filter(|&&o| o != i && o != j) {
+                let other = &triangles[o as usize];
+                // The bounding sphere first: most triangles lie beyond the gap found so far.
+                if point_segment_distance(other.centre, s0, s1) - other.radius < gap {
+                    gap = gap.min(segment_distance(other, s0, s1));
+                }
+            }
             (0.5 * gap * (1.0 - 1e-9) - 4.0 * epsilon).max(0.0)
         })
     }

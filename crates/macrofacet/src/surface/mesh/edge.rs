@@ -12,7 +12,7 @@
 
 use super::bvh::Bvh;
 use crate::surface::Curvature;
-use super::triangle::{closest_on_triangle, Triangle};
+use super::triangle::{closest_on_triangle, segment_parameter, Triangle};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -148,7 +148,7 @@ impl EdgeZone {
                     hi = mid;
                 }
             }
-            if lo >= min_piece && best.map_or(true, |b| lo > b) {
+            if best.map_or(true, |b| lo > b) {
                 best = Some(lo);
             }
         }
@@ -167,9 +167,7 @@ fn middle(t: &Triangle, k: usize, level: usize) -> (DVec3, DVec3) {
 }
 
 fn point_segment_distance(p: DVec3, s0: DVec3, s1: DVec3) -> f64 {
-    let e = s1 - s0;
-    let along = if e.length_squared() > 0.0 { ((p - s0).dot(e) / e.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-    (p - (s0 + along * e)).length()
+    (p - (s0 + segment_parameter(p, s0, s1) * (s1 - s0))).length()
 }
 
 /// The distance between the segments `p1 q1` and `p2 q2` (Ericson, *Real-Time Collision

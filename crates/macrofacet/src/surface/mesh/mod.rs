@@ -31,7 +31,7 @@ use region::FaceRegion;
 use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, Tangent};
 use smallvec::SmallVec;
 use std::collections::HashMap;
-use triangle::{closer, closest_among, closest_on_triangle, Attributes, Closest, Feature, Triangle};
+use triangle::{closer, closest_among, closest_on_triangle, segment_parameter, Attributes, Closest, Feature, Triangle};
 use crate::frame::rescaled;
 
 /// Per-candidate values of a segment bound, on the stack.
@@ -479,7 +479,8 @@ impl TriangleMesh {
         // closest): asking again would find it, or one as close, again.
         let i = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::hint(cache)).triangle);
         let region = &self.regions[i as usize];
-        let piece = region.piece(self.triangles[i as usize].n, p, d, length).map_or(0.0, |piece| piece.length);
+        let tri = &self.triangles[i as usize];
+        let piece = region.piece(tri.n, p, d, length).map_or(0.0, |piece| piece.length);
         // A sliver (the start on the region's boundary, up to rounding) would not advance.
         if piece < MIN_PIECE * length {
             // (Not below MIN_PIECE of the segment: a sliver triangle's strip may lie below the
@@ -487,7 +488,6 @@ impl TriangleMesh {
             let general = region.strip_crossing(p, d).map_or(length, |strip| length.min(strip.max(MIN_PIECE * length)));
             // The longest piece of it in an edge's zone, if any: there the edge's two triangles
             // are the only candidates.
-            let tri = &self.triangles[i as usize];
             let mut best: Option<(f64, &EdgeZone)> = None;
             for (k, zone) in self.edges[i as usize].iter().enumerate().filter(|(_, zone)| zone.neighbour != u32::MAX) {
                 if let Some(piece) = zone.piece(tri, k, p, d, general, MIN_PIECE * general) {
@@ -498,7 +498,6 @@ impl TriangleMesh {
             }
             return Err(best.map_or((general, None), |(piece, zone)| (piece, Some(([i, zone.neighbour], zone.curvature)))));
         }
-        let tri = &self.triangles[i as usize];
         let end_p = p + piece * d;
         let (start, end) = (closest_on_triangle(tri, p, i), closest_on_triangle(tri, end_p, i));
         let plane = [tri.n.dot(p - tri.p[0]), tri.n.dot(end_p - tri.p[0])];
@@ -512,7 +511,7 @@ impl TriangleMesh {
                 let m = |b: DVec3| b.x * ns[0] + b.y * ns[1] + b.z * ns[2];
                 let (m0, m1) = (m(start.barycentric), m(end.barycentric));
                 let dm = m1 - m0;
-                let foot = if dm.length_squared() > 0.0 { (-m0.dot(dm) / dm.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+                let foot = segment_parameter(DVec3::ZERO, m0, m1);
                 let min_len = (m0 + foot * dm).length().max(attributes.shading_min_length);
                 if !(min_len > 0.0) {
                     return Err((length, None));

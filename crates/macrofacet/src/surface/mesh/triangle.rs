@@ -111,6 +111,17 @@ pub(super) fn may_be_within(t: &Triangle, p: DVec3, distance_sq: f64) -> bool {
     !(plane * plane + gap * gap > limit)
 }
 
+/// The parameter `s ∈ [0, 1]` of the point `a + s (b − a)` of a segment closest to `p` (0 for a
+/// segment of zero length).
+pub(super) fn segment_parameter(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let e = b - a;
+    if e.length_squared() > 0.0 {
+        ((p - a).dot(e) / e.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
 /// The closest point of triangle `t` (index `index`) to `p`. A degenerate triangle is treated
 /// as its three edges.
 pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest {
@@ -121,12 +132,11 @@ pub(super) fn closest_on_triangle(t: &Triangle, p: DVec3, index: u32) -> Closest
         (0..3)
             .map(|i| {
                 let (u, v) = (t.p[i], t.p[(i + 1) % 3]);
-                let e = v - u;
-                let s = if e.length_squared() > 0.0 { ((p - u).dot(e) / e.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+                let s = segment_parameter(p, u, v);
                 let mut bary = DVec3::ZERO;
                 bary[i] = 1.0 - s;
                 bary[(i + 1) % 3] = s;
-                make(u + s * e, bary, Feature::Edge(i))
+                make(u + s * (v - u), bary, Feature::Edge(i))
             })
             .min_by(|x, y| x.distance_sq.total_cmp(&y.distance_sq))
             .expect("three edges")

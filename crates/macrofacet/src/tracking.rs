@@ -38,7 +38,7 @@ use glam::DVec3;
 /// The PCG32 stream ("mftrack") of the C ABI's tracking calls: `mf_track_*` with `seed` equals
 /// [`Tracker::with_bounds`] (with [`ProjectedAreaBounds::of`] the medium, built with its handle)
 /// with `Pcg32::new(seed, TRACK_STREAM)`.
-pub const TRACK_STREAM: u64 = 0x6d66_7472_6163_6b;
+pub const TRACK_STREAM: u64 = 0x006d_6674_7261_636b;
 
 /// Counts of one tracking call, for tests and benchmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -260,7 +260,7 @@ impl ProjectedAreaBounds {
     /// most) each cell's smallest (largest) area, as the range meets every cell. The extremes
     /// over `k0..=k1` are those of the two table entries of span `2^j <= k1 − k0 + 1` that start
     /// at `k0` and end at `k1`.
-    fn from_cells(&self, cos: [f64; 2], side: Side) -> Option<f64> {
+    fn tabulated(&self, cos: [f64; 2], side: Side) -> Option<f64> {
         let cells = self.cells.as_deref()?;
         if !(cos[0] >= -1.0 && cos[1] <= 1.0) {
             return None;
@@ -283,7 +283,7 @@ impl ProjectedAreaBounds {
     /// `S_up >= σ(d_local)` for every frame whose normal has `d·n ∈ [c_lo, c_hi]`, any tangent:
     /// from the cells where they answer, else [`Self::upper_exact`].
     fn upper(&self, cos: [f64; 2]) -> f64 {
-        self.from_cells(cos, Side::Upper).unwrap_or_else(|| self.upper_exact(cos))
+        self.tabulated(cos, Side::Upper).unwrap_or_else(|| self.upper_exact(cos))
     }
 
     /// `S_up` from the distribution.
@@ -298,7 +298,7 @@ impl ProjectedAreaBounds {
 
     /// `S_lo <= σ(d_local)` over the same frames (at least 0): from the cells where they answer.
     fn lower(&self, cos: [f64; 2]) -> f64 {
-        self.from_cells(cos, Side::Lower).unwrap_or_else(|| self.lower_exact(cos))
+        self.tabulated(cos, Side::Lower).unwrap_or_else(|| self.lower_exact(cos))
     }
 
     /// `S_lo` from the distribution.
@@ -1052,13 +1052,13 @@ mod tests {
                 narrow += usize::from(width < 1e-2);
                 let points: Vec<f64> = (0..=16).map(|i| area(cos[0] + (cos[1] - cos[0]) * i as f64 / 16.0, std::f64::consts::TAU * rng.next_f64())).collect();
                 let (largest, smallest) = points.iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &a| (hi.max(a), lo.min(a)));
-                if let Some(upper) = bounds.from_cells(cos, Side::Upper) {
+                if let Some(upper) = bounds.tabulated(cos, Side::Upper) {
                     answered += usize::from(width < 1e-2);
                     assert!(upper >= largest, "{ndf:?} over {cos:?}: cells' S_up {upper} below the area {largest}");
                     let exact = bounds.upper_exact(cos);
                     assert!(upper <= CELL_LOOSENESS * exact * (1.0 + 1e-12), "{ndf:?} over {cos:?}: cells' S_up {upper} against {exact}");
                 }
-                if let Some(lower) = bounds.from_cells(cos, Side::Lower) {
+                if let Some(lower) = bounds.tabulated(cos, Side::Lower) {
                     assert!(lower <= smallest, "{ndf:?} over {cos:?}: cells' S_lo {lower} above the area {smallest}");
                     let exact = bounds.lower_exact(cos);
                     assert!(CELL_LOOSENESS * lower >= exact * (1.0 - 1e-12), "{ndf:?} over {cos:?}: cells' S_lo {lower} against {exact}");

@@ -203,7 +203,6 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
             }
         }
     }
-    let mut faces = faces;
     faces.sort_unstable();
     let mut out = Enclosure { cell: h, ..Default::default() };
     // A corner's vertex, numbered in order of first use. The faces come in increasing z, and a

@@ -54,7 +54,7 @@ impl GridSurface {
     /// `to_world` = (3×3 linear part, translation), a rotation times a uniform scale.
     pub fn new(values: &[f32], dims: [usize; 3], linear: DMat3, translation: DVec3) -> Result<GridSurface> {
         let invalid = |m: String| Error::new(ErrorKind::InvalidArgument, m);
-        if dims.iter().any(|&n| n < 2 || n > (1 << 20)) {
+        if dims.iter().any(|n| !(2..=1 << 20).contains(n)) {
             return Err(invalid(format!("grid dimensions must lie in [2, 2^20] per axis, got {dims:?}")));
         }
         let count = dims[0].checked_mul(dims[1]).and_then(|n| n.checked_mul(dims[2])).ok_or_else(|| invalid(format!("grid dimensions {dims:?} are too large")))?;

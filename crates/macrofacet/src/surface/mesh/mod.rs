@@ -51,6 +51,15 @@ const PAD: f64 = 8.0;
 const CERTIFIED_TRIES: usize = 4;
 /// Certified pieces shorter than this fraction of the segment are left to the general bound.
 const MIN_PIECE: f64 = 1e-3;
+/// A certified piece shorter than this fraction of the tracker's tolerance (4σ: so σ) gives way
+/// to the far bound over the whole segment when that is longer: an exact piece that ends a
+/// fraction of σ further, at the next triangle's region, costs a segment for little distance,
+/// where the Lipschitz bound of [`TriangleMesh::far_bound`] covers at least 2σ at a majorant
+/// a few times looser. Against certified pieces of any length, the default scene (160×90,
+/// 2 spp) rendered with 5.6 % fewer instructions at 1/4, 5.5 % at 1/2, 4.8 % at 1/8 and 3.7 %
+/// at 1/16, its thick shells 4 % fewer and the thin torus anchor 0.15 %; the general bound in
+/// its place saved nothing.
+const SHORT_PIECE: f64 = 0.25;
 /// The grid's cells, in mean edge lengths.
 const CELL_EDGES: f64 = 0.5;
 
@@ -602,7 +611,16 @@ impl MeanSurface for TriangleMesh {
     }
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> Result<SegmentBound> {
+        let short = SHORT_PIECE * tolerance;
         let (length, pair) = match self.certified_bound(p, d, length, cache) {
+            Ok(bound) if bound.length < short && length > short => {
+                // The certified piece's triangle is the closest at `p`: the far bound's chord
+                // starts from it. (Its end and candidate were recorded for a segment not taken.)
+                let nearest = cache.candidates[0];
+                cache.candidates.clear();
+                cache.hint = Some((p, nearest));
+                return Ok(self.far_bound(start, p, d, length, tolerance, cache));
+            }
             Ok(bound) => return Ok(bound),
             Err(general) => general,
         };

@@ -7,10 +7,11 @@
 //! Segment bounds are rigorous for any closed, consistently oriented mesh. Where the segment
 //! stays in one triangle's face region ([`region`]), `f` is that triangle's plane distance; in an
 //! edge's zone ([`edge`]) the edge's two triangles are the *candidates*, the only triangles that
-//! can be closest there; elsewhere the bound is the Lipschitz one of [`TriangleMesh::far_bound`].
-//! Over candidates, every triangle's distance `d_T` is convex along a line (the distance to a
-//! convex set), so it lies above its tangent at the segment start and below its chord, and
-//! `|f| = min_T d_T`. While the lower bound `A(s) = min_T tangent_T(s)` of `|f|` stays positive
+//! can be closest there; deep inside, those of the grid's cells along the segment (the
+//! triangles within `|f(p)| + 2L` of its start `p`) where they are few; elsewhere the bound is
+//! the Lipschitz one of [`TriangleMesh::far_bound`]. Over candidates, every
+//! triangle's distance `d_T` is convex along a line (the distance to a convex set), so it lies
+//! above its tangent at the segment start and below its chord, and `|f| = min_T d_T`. While the lower bound `A(s) = min_T tangent_T(s)` of `|f|` stays positive
 //! the sign cannot change, so the segment is cut where it may cross the surface and each part
 //! gets linear bounds. The frame normal's range follows from the candidates' vertex normals (or,
 //! for the gradient, from the monotone derivatives of the `d_T`). A point query on the current
@@ -36,8 +37,13 @@ use std::collections::HashMap;
 use triangle::{closer, closest_among, closest_on_triangle, segment_parameter, Attributes, Closest, Feature, Triangle};
 use crate::frame::rescaled;
 
-/// Per-candidate values of a segment bound (an edge's two triangles), on the stack.
-type Few<T> = SmallVec<[T; 2]>;
+/// Per-candidate values of a segment bound, on the stack.
+type Few<T> = SmallVec<[T; MAX_CANDIDATES]>;
+
+/// The most candidate triangles a segment bound considers (each costs two closest-point
+/// queries); with more, the far bound is used.
+const MAX_CANDIDATES: usize = 16;
+
 /// The bounds are padded by this many `epsilon` (rounding, and an undetermined sign right at
 /// the start of a segment).
 const PAD: f64 = 8.0;
@@ -58,8 +64,8 @@ const MIN_PIECE: f64 = 1e-3;
 /// at 1/16, its thick shells 4 % fewer and the thin torus anchor 0.15 %; the general bound in
 /// its place saved nothing. So does a short piece in an edge's zone (0.4 % fewer).
 const SHORT_PIECE: f64 = 0.25;
-/// The far bound's reach beyond `|f|`, in tolerances (4σ: 3σ). Since the far bound replaced
-/// the general one outside face regions and edge zones, against 1/2 (2σ), 3/4 rendered the
+/// The far bound's reach beyond `|f|`, in tolerances (4σ: 3σ). Since the far bound took over
+/// from the general one across long cell lists, against 1/2 (2σ), 3/4 rendered the
 /// default scene (160×90, 2 spp) with 0.6 % fewer instructions and 1 with 0.7 % fewer; the
 /// thin torus anchor the same.
 const FAR_REACH: f64 = 0.75;
@@ -480,10 +486,12 @@ impl TriangleMesh {
     /// region of one triangle `T` ([`region`]), where `f` is exactly the signed distance to `T`'s
     /// plane and the frame normal is `T`'s interpolated vertex normal (affine along the piece)
     /// or its face normal, of the triangle closest at `p` (the one recorded there, else a query).
-    /// Otherwise `Err` with where that begins in an edge's zone ([`edge`]), its piece in the zone
-    /// with the edge's two triangles, the only candidates there (the zone is looked for over the
-    /// strip beside an edge that no triangle certifies, when `p` is about to cross it, else over
-    /// the whole `length`); without a zone, the far bound's turn.
+    /// Otherwise `Err` with the length the general bound should cover: where `p` is about to
+    /// cross the strip beside an edge that no triangle certifies (a ray passing from one
+    /// triangle's region into its neighbour's), only that strip, whose few candidates make the
+    /// general bound cheap; else the whole `length`. Or, where that begins in an edge's zone
+    /// ([`edge`]), its piece in the zone with the edge's two triangles, the only candidates
+    /// there.
     fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> std::result::Result<SegmentBound, (f64, Option<ZonePair>)> {
         // A triangle recorded at `p` is the closest there (every query and bound records the
         // closest): asking again would find it, or one as close, again.
@@ -631,27 +639,54 @@ impl MeanSurface for TriangleMesh {
             cache.candidates.clear();
             return Ok(self.far_bound(start, p, d, requested, tolerance, cache));
         }
-        // Outside the face regions and the edges' zones, the far bound over the length asked
-        // for. A bound over the candidates of the grid's cells along the segment (near corners,
-        // and across thick shells) cost more than the segments and tentative collisions it
-        // saved: the default scene (160×90, 2 spp) rendered with 9 % fewer instructions
-        // without it, the thin torus anchor 1.8 % fewer.
-        let Some((pair, curvature)) = pair else {
-            cache.candidates.clear();
-            return Ok(self.far_bound(start, p, d, requested, tolerance, cache));
-        };
-        // An edge's zone: one of its two triangles is the closest everywhere on the segment.
         let end_p = p + length * d;
-        cache.candidates.clear();
-        cache.candidates.extend_from_slice(&pair);
-        let end_closest = closest_among(&self.triangles, end_p, &pair, Closest::NONE);
-        let end = self.surface_point(end_p, &end_closest);
-        if let Some(bound) = curvature.and_then(|c| self.dihedral_bound(start, &end, &end_closest, p, d, length, pair, c)) {
-            cache.hint = Some((end_p, end_closest.triangle));
-            return Ok(bound);
+        let (end_closest, f_end, tent);
+        if let Some((pair, curvature)) = pair {
+            // An edge's zone: one of its two triangles is the closest everywhere on the segment.
+            cache.candidates.clear();
+            cache.candidates.extend_from_slice(&pair);
+            end_closest = closest_among(&self.triangles, end_p, &pair, Closest::NONE);
+            let end = self.surface_point(end_p, &end_closest);
+            if let Some(bound) = curvature.and_then(|c| self.dihedral_bound(start, &end, &end_closest, p, d, length, pair, c)) {
+                cache.hint = Some((end_p, end_closest.triangle));
+                return Ok(bound);
+            }
+            f_end = end.f;
+            tent = (start.f.abs(), f_end.abs());
+        } else {
+            // Deep inside (below −tolerance), the candidates: the union of the grid's lists along
+            // the segment, less the triangles that cannot be closest anywhere on it (the closest
+            // triangle to q(s) lies within |f(q(s))| <= tent(s) = min(|f(p)| + s, |f(end)| +
+            // L − s) of it, f being 1-Lipschitz). There the density is large and the far bound,
+            // long (|f|) and for any normal, would take tentative collisions without end where
+            // the candidates' normals see no flake (`fuzz_regressions_tracking`: deep inside an
+            // octahedron). Elsewhere, outside the grid's band or with many candidates, the far
+            // bound over the length asked for: above and within the shell, the general bound
+            // cost more than the segments and tentative collisions it saved (the default scene
+            // at 160×90, 2 spp rendered with 9.1 % fewer instructions without it, the thin torus
+            // anchor with 1.8 % fewer).
+            if !(start.f < -tolerance && self.grid.segment(p, d, length, &mut cache.candidates)) {
+                cache.candidates.clear();
+                return Ok(self.far_bound(start, p, d, requested, tolerance, cache));
+            }
+            end_closest = self.closest(end_p, Self::hint(cache));
+            f_end = self.surface_point(end_p, &end_closest).f;
+            tent = (start.f.abs(), f_end.abs());
+            // Drop the triangles whose bounding sphere stays beyond the tent from the segment.
+            let reach = 0.5 * (tent.0 + tent.1 + length) * (1.0 + 1e-9) + self.epsilon;
+            cache.candidates.retain(|&i| {
+                let t = &self.triangles[i as usize];
+                let along = (t.centre - p).dot(d).clamp(0.0, length);
+                (t.centre - (p + along * d)).length() - t.radius <= reach
+            });
+            if cache.candidates.len() > MAX_CANDIDATES {
+                cache.candidates.clear();
+                return Ok(self.far_bound(start, p, d, requested, tolerance, cache));
+            }
+            if !cache.candidates.contains(&end_closest.triangle) {
+                cache.candidates.push(end_closest.triangle); // guards against rounding
+            }
         }
-        let f_end = end.f;
-        let tent = (start.f.abs(), f_end.abs());
         let first = self.tangents(p, d, &cache.candidates, length);
         let last = self.tangents(p + length * d, d, &cache.candidates, length);
         let mut keep: Few<bool> = first.iter().zip(&last).map(|(a, b)| may_be_closest(a, b, tent, length, self.epsilon)).collect();

@@ -65,7 +65,7 @@ const MIN_PIECE: f64 = 1e-3;
 /// its place saved nothing. So does a short piece in an edge's zone (0.4 % fewer).
 const SHORT_PIECE: f64 = 0.25;
 /// The far bound's reach beyond `|f|`, in tolerances (4σ: 3σ). Since the far bound took over
-/// from the general one across long cell lists, against 1/2 (2σ), 3/4 rendered the
+/// from the general one above and within the shell, against 1/2 (2σ), 3/4 rendered the
 /// default scene (160×90, 2 spp) with 0.6 % fewer instructions and 1 with 0.7 % fewer; the
 /// thin torus anchor the same.
 const FAR_REACH: f64 = 0.75;

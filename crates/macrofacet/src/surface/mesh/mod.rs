@@ -9,13 +9,13 @@
 //! edge's zone ([`edge`]) the edge's two triangles are the *candidates*, the only triangles that
 //! can be closest there; deep inside, those of the grid's cells along the segment (the
 //! triangles within `|f(p)| + 2L` of its start `p`) where they are few; elsewhere the bound is
-//! the Lipschitz one of [`TriangleMesh::far_bound`]. Over candidates, every
-//! triangle's distance `d_T` is convex along a line (the distance to a convex set), so it lies
-//! above its tangent at the segment start and below its chord, and `|f| = min_T d_T`. While the lower bound `A(s) = min_T tangent_T(s)` of `|f|` stays positive
-//! the sign cannot change, so the segment is cut where it may cross the surface and each part
-//! gets linear bounds. The frame normal's range follows from the candidates' vertex normals (or,
-//! for the gradient, from the monotone derivatives of the `d_T`). A point query on the current
-//! segment searches the candidates only.
+//! the Lipschitz one of [`TriangleMesh::far_bound`]. Over candidates, every triangle's distance
+//! `d_T` is convex along a line (the distance to a convex set), so it lies above its tangent at
+//! the segment start and below its chord, and `|f| = min_T d_T`. While the lower bound
+//! `A(s) = min_T tangent_T(s)` of `|f|` stays positive the sign cannot change, so the segment is
+//! cut where it may cross the surface and each part gets linear bounds. The frame normal's range
+//! follows from the candidates' vertex normals (or, for the gradient, from the monotone
+//! derivatives of the `d_T`). A point query on the current segment searches the candidates only.
 
 mod bvh;
 mod edge;
@@ -43,7 +43,6 @@ type Few<T> = SmallVec<[T; MAX_CANDIDATES]>;
 /// The most candidate triangles a segment bound considers (each costs two closest-point
 /// queries); with more, the far bound is used.
 const MAX_CANDIDATES: usize = 16;
-
 /// The bounds are padded by this many `epsilon` (rounding, and an undetermined sign right at
 /// the start of a segment).
 const PAD: f64 = 8.0;

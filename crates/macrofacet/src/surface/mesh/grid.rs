@@ -23,6 +23,11 @@ const MAX_CELLS: f64 = 2.0e6;
 /// Longer lists are dropped (queries there use the hierarchy).
 const MAX_LIST: usize = 32;
 
+/// A union of cell lists: room for a few cells' lists on the stack (a tracking call's cache
+/// starts empty, and a `Vec` allocated and grew in most calls through a mesh: 3.5 allocations
+/// per call on the thin torus anchor).
+pub(super) type Lists = smallvec::SmallVec<[u32; 4 * MAX_LIST]>;
+
 #[derive(Clone, Debug)]
 pub(super) struct CellGrid {
     origin: DVec3,
@@ -165,7 +170,7 @@ impl CellGrid {
 
     /// The union of the lists of every cell the segment `p + s d`, `s ∈ [0, length]`, crosses
     /// (3-D DDA, Amanatides & Woo 1987), or `false` when it leaves the band.
-    pub fn segment(&self, p: DVec3, d: DVec3, length: f64, out: &mut Vec<u32>) -> bool {
+    pub fn segment(&self, p: DVec3, d: DVec3, length: f64, out: &mut Lists) -> bool {
         out.clear();
         let Some(mut c) = self.cell_of(p) else { return false };
         // A segment that ends outside the band leaves it: known before walking its cells (in a
@@ -174,9 +179,6 @@ impl CellGrid {
         if self.list_at(p + length * d).is_none() {
             return false;
         }
-        // Room for the lists of a few cells at once: the caller's vector starts empty with each
-        // tracking call, and growing it by doubling took five reallocations.
-        out.reserve(4 * MAX_LIST);
         let step = IVec3::new(sign(d.x), sign(d.y), sign(d.z));
         let rel = (p - self.origin) / self.h;
         // Parameter of the next cell boundary along each axis, and between boundaries.
@@ -231,7 +233,7 @@ fn distinct_slot(x: u32) -> usize {
 /// most triangles (neighbouring cells share them): a long one drops its repeats first
 /// ([`drop_repeats`]), so that only the distinct ones are sorted (sorting ~150 entries, most of
 /// them repeats, was 6 % of a thin mesh shell's rendering).
-fn sort_distinct(v: &mut Vec<u32>) {
+fn sort_distinct(v: &mut Lists) {
     if v.len() > SHORT_UNION {
         drop_repeats(v);
     }
@@ -243,7 +245,7 @@ fn sort_distinct(v: &mut Vec<u32>) {
 /// occurrence in place of the entries already read. With more than half the table's slots
 /// taken it stops, `v` still holding every value (the entries before the current one are kept
 /// values or repeats of them, the rest unread).
-fn drop_repeats(v: &mut Vec<u32>) {
+fn drop_repeats(v: &mut Lists) {
     const EMPTY: u32 = u32::MAX; // never a triangle: indices are below the triangle count
     let mut table = [EMPTY; DISTINCT_SLOTS];
     let mut kept = 0;
@@ -282,7 +284,7 @@ fn sign(x: f64) -> i32 {
 
 #[cfg(test)]
 mod tests {
-    use super::{distinct_slot, sort_distinct, DISTINCT_SLOTS};
+    use super::{distinct_slot, sort_distinct, Lists, DISTINCT_SLOTS};
     use crate::rng::Pcg32;
 
     #[test]
@@ -296,19 +298,19 @@ mod tests {
                 let mut want = v.clone();
                 want.sort_unstable();
                 want.dedup();
-                let mut got = v.clone();
+                let mut got = Lists::from_slice(&v);
                 sort_distinct(&mut got);
-                assert_eq!(got, want, "len {len}, values below {range}");
+                assert_eq!(got.as_slice(), want.as_slice(), "len {len}, values below {range}");
             }
         }
         // Values that all hash to one slot probe one long run of slots.
         let same: Vec<u32> = (0..200_000u32).filter(|&x| distinct_slot(x) == distinct_slot(0)).take(60).collect();
         assert_eq!(same.len(), 60);
-        let mut v: Vec<u32> = (0..300).map(|i| same[(i * 7) % same.len()]).collect();
-        let mut want = v.clone();
+        let mut v: Lists = (0..300).map(|i| same[(i * 7) % same.len()]).collect();
+        let mut want = v.to_vec();
         want.sort_unstable();
         want.dedup();
         sort_distinct(&mut v);
-        assert_eq!(v, want);
+        assert_eq!(v.as_slice(), want.as_slice());
     }
 }

@@ -96,7 +96,7 @@ pub struct TriangleMesh {
 /// Candidate triangles of the current segment (see the module documentation).
 #[derive(Clone, Debug, Default)]
 pub struct MeshCache {
-    candidates: Vec<u32>,
+    candidates: grid::Lists,
     /// A point of the ray and the triangle closest to it (the start of the next segment).
     hint: Option<(DVec3, u32)>,
 }
@@ -673,8 +673,8 @@ impl MeanSurface for TriangleMesh {
             tent = (start.f.abs(), f_end.abs());
             // Drop the triangles whose bounding sphere stays beyond the tent from the segment.
             let reach = 0.5 * (tent.0 + tent.1 + length) * (1.0 + 1e-9) + self.epsilon;
-            cache.candidates.retain(|&i| {
-                let t = &self.triangles[i as usize];
+            cache.candidates.retain(|i| {
+                let t = &self.triangles[*i as usize];
                 let along = (t.centre - p).dot(d).clamp(0.0, length);
                 (t.centre - (p + along * d)).length() - t.radius <= reach
             });

@@ -103,14 +103,22 @@ pub fn check_finite_vector(name: &str, v: DVec3) -> Result<DVec3> {
 
 /// Rejects vectors that are not finite and unit length (within `1e-6`, f32 round-off of a host).
 /// Returns the vector renormalised in f64.
+/// (Inlined, with the messages out of line: every call of the C ABI checks its directions.)
+#[inline]
 pub fn check_direction(name: &str, v: DVec3) -> Result<DVec3> {
-    check_finite_vector(name, v)?;
     let len = v.length();
-    if (len - 1.0).abs() > 1e-6 {
-        return Err(Error::new(
-            ErrorKind::InvalidArgument,
-            format!("{name} must be a unit vector, got {v} (length {len})"),
-        ));
+    // (A NaN or infinite component fails the comparison.)
+    if !((len - 1.0).abs() <= 1e-6) {
+        return Err(not_a_direction(name, v));
     }
     Ok(v / len)
+}
+
+#[cold]
+#[inline(never)]
+fn not_a_direction(name: &str, v: DVec3) -> Error {
+    if let Err(e) = check_finite_vector(name, v) {
+        return e;
+    }
+    Error::new(ErrorKind::InvalidArgument, format!("{name} must be a unit vector, got {v} (length {})", v.length()))
 }

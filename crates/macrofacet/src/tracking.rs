@@ -512,6 +512,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         rho * self.medium.sigma(d_local)
     }
 
+    #[inline]
     fn checked(&self, point: Result<SurfacePoint>, p: DVec3, stats: &mut TrackStats) -> Result<SurfacePoint> {
         stats.surface_queries += 1;
         point?.validated(p)
@@ -968,12 +969,20 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 /// The point `p + s d` of a ray, refused where it leaves f64's range: no surface query, and no
 /// collision, can be represented there (found by fuzzing: a tentative collision beyond a sphere
 /// of radius `f64::MAX` had `f = −inf`, broke the majorant and came back at infinity).
+/// (Inlined, with the message out of line: every query of the tracker takes a point.)
+#[inline]
 fn ray_point(p: DVec3, s: f64, d: DVec3) -> Result<DVec3> {
     let q = p + s * d;
     if !q.is_finite() {
-        return Err(Error::new(ErrorKind::InvalidArgument, format!("the ray from {p} along {d} leaves the range of f64 at {s:e} from there: no point beyond can be represented")));
+        return Err(beyond_f64(p, s, d));
     }
     Ok(q)
+}
+
+#[cold]
+#[inline(never)]
+fn beyond_f64(p: DVec3, s: f64, d: DVec3) -> Error {
+    Error::new(ErrorKind::InvalidArgument, format!("the ray from {p} along {d} leaves the range of f64 at {s:e} from there: no point beyond can be represented"))
 }
 
 /// Russian roulette on a transmittance estimate below [`ROULETTE_THRESHOLD`]: survives with
@@ -992,17 +1001,24 @@ fn roulette(transmittance: &mut f64, rng: &mut Pcg32) -> bool {
 }
 
 /// Counts one tentative collision of a call against [`MAX_TENTATIVE`].
+#[inline]
 fn spend_tentative(budget: &mut u64, origin: DVec3, d: DVec3) -> Result<()> {
     *budget += 1;
     if *budget > MAX_TENTATIVE {
-        return Err(Error::new(
-            ErrorKind::InvalidArgument,
-            format!(
-                "tracking from {origin} along {d} needed more than {MAX_TENTATIVE} tentative collisions: the majorant is loose by many orders of magnitude (sigma far below the surface's size or the rounding of the coordinates, or a deep start inside)"
-            ),
-        ));
+        return Err(too_many_tentative(origin, d));
     }
     Ok(())
+}
+
+#[cold]
+#[inline(never)]
+fn too_many_tentative(origin: DVec3, d: DVec3) -> Error {
+    Error::new(
+        ErrorKind::InvalidArgument,
+        format!(
+            "tracking from {origin} along {d} needed more than {MAX_TENTATIVE} tentative collisions: the majorant is loose by many orders of magnitude (sigma far below the surface's size or the rounding of the coordinates, or a deep start inside)"
+        ),
+    )
 }
 
 /// The error of a call that took [`MAX_SEGMENTS`] segments.

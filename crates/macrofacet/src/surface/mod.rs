@@ -52,22 +52,30 @@ impl SurfacePoint {
     /// The point if it is usable at `p`: `f` not NaN, a unit normal, a finite tangent and uv
     /// (every query of a mean surface goes through this: the tracker's, `mf_surface_eval`'s and
     /// the enclosure's; found by fuzzing: a degenerate mesh or a far point gave a zero normal).
+    #[inline]
     pub fn validated(self, p: DVec3) -> Result<SurfacePoint> {
         // |n| within NORMAL_TOLERANCE of 1, compared squared (no square root on the hot path);
         // a NaN or infinite normal fails it too.
         const LENGTH_SQ: [f64; 2] = [(1.0 - NORMAL_TOLERANCE) * (1.0 - NORMAL_TOLERANCE), (1.0 + NORMAL_TOLERANCE) * (1.0 + NORMAL_TOLERANCE)];
         let unit = (LENGTH_SQ[0]..=LENGTH_SQ[1]).contains(&self.normal.length_squared());
+        // (Inlined, with the message out of line: the check is on every query of the tracker.)
         if self.f.is_nan() || !unit || !self.tangent.is_finite() || !self.uv.is_finite() {
-            let len = self.normal.length();
-            return Err(Error::new(
-                ErrorKind::InvalidArgument,
-                format!(
-                    "the mean surface at {p} returned f = {}, normal {} (length {len}), tangent {}, uv {}: f must not be NaN, the normal must be unit, the tangent and uv finite",
-                    self.f, self.normal, self.tangent, self.uv
-                ),
-            ));
+            return Err(self.unusable(p));
         }
         Ok(self)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn unusable(&self, p: DVec3) -> Error {
+        let len = self.normal.length();
+        Error::new(
+            ErrorKind::InvalidArgument,
+            format!(
+                "the mean surface at {p} returned f = {}, normal {} (length {len}), tangent {}, uv {}: f must not be NaN, the normal must be unit, the tangent and uv finite",
+                self.f, self.normal, self.tangent, self.uv
+            ),
+        )
     }
 }
 
@@ -115,25 +123,40 @@ impl SegmentBound {
     /// Checks what a surface returned: finite lengths, ordered lines, a cosine range in
     /// `[-1, 1]`, and consistency with the known value `f0` at the start. `what` names the
     /// surface in the message.
+    #[inline]
     pub fn validate(&self, asked: f64, f0: f64, what: &str) -> Result<()> {
-        let bad = |m: String| Err(Error::new(ErrorKind::InvalidArgument, format!("{what}: segment bound {m}")));
+        // 1e-9 relative slack: hosts compute the bound and the point in different roundings.
+        let slack = 1e-9 * (1.0 + f0.abs());
+        let usable = self.length > 0.0
+            && self.length <= asked
+            && !self.f_lo.iter().any(|v| v.is_nan() || *v == f64::INFINITY)
+            && !self.f_hi.iter().any(|v| v.is_nan() || *v == f64::NEG_INFINITY)
+            && !(self.f_lo[0] > f0 + slack || self.f_hi[0] < f0 - slack)
+            && self.cos[0] >= -1.0 - 1e-9
+            && self.cos[1] <= 1.0 + 1e-9
+            && self.cos[0] <= self.cos[1];
+        // (Inlined, with the messages out of line: the check is on every segment.)
+        if usable {
+            Ok(())
+        } else {
+            Err(self.unusable(asked, f0, slack, what))
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn unusable(&self, asked: f64, f0: f64, slack: f64, what: &str) -> Error {
+        let bad = |m: String| Error::new(ErrorKind::InvalidArgument, format!("{what}: segment bound {m}"));
         if !(self.length > 0.0 && self.length <= asked) {
             return bad(format!("length must lie in (0, {asked}], got {}", self.length));
         }
-        if self.f_lo.iter().any(|v| v.is_nan() || *v == f64::INFINITY)
-            || self.f_hi.iter().any(|v| v.is_nan() || *v == f64::NEG_INFINITY)
-        {
+        if self.f_lo.iter().any(|v| v.is_nan() || *v == f64::INFINITY) || self.f_hi.iter().any(|v| v.is_nan() || *v == f64::NEG_INFINITY) {
             return bad(format!("f_lo must be < +inf and f_hi > -inf, not NaN; got f_lo {:?}, f_hi {:?}", self.f_lo, self.f_hi));
         }
-        // 1e-9 relative slack: hosts compute the bound and the point in different roundings.
-        let slack = 1e-9 * (1.0 + f0.abs());
         if self.f_lo[0] > f0 + slack || self.f_hi[0] < f0 - slack {
             return bad(format!("[{}, {}] at the start does not contain f = {f0}", self.f_lo[0], self.f_hi[0]));
         }
-        if !(self.cos[0] >= -1.0 - 1e-9 && self.cos[1] <= 1.0 + 1e-9 && self.cos[0] <= self.cos[1]) {
-            return bad(format!("cos range must be an ordered range within [-1, 1], got {:?}", self.cos));
-        }
-        Ok(())
+        bad(format!("cos range must be an ordered range within [-1, 1], got {:?}", self.cos))
     }
 }
 
@@ -162,8 +185,10 @@ impl Aabb {
     /// the ray misses it.
     pub fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
         let (mut lo, mut hi) = (t0, t1);
+        // (Arrays: indexing a DVec3 by a loop variable costs a match per access.)
+        let (min, max, o, d) = (self.min.to_array(), self.max.to_array(), o.to_array(), d.to_array());
         for a in 0..3 {
-            let (bmin, bmax, oa, da) = (self.min[a], self.max[a], o[a], d[a]);
+            let (bmin, bmax, oa, da) = (min[a], max[a], o[a], d[a]);
             // (An unbounded axis never rejects: o is finite.)
             if da == 0.0 {
                 if oa < bmin || oa > bmax {

@@ -31,6 +31,7 @@ impl Sphere {
 
     /// [`MeanSurface::point`] but for `uv` (zero): the tracker's queries, where the two angles
     /// of the uv would cost as much as the rest ([`MeanSurface::uv`]).
+    #[inline]
     fn point_without_uv(&self, p: DVec3) -> SurfacePoint {
         // Where `|v|` is finite it gives the direction too, with one square root in the common
         // case ([`Self::distance`] halves `v` otherwise).
@@ -112,25 +113,34 @@ impl MeanSurface for Sphere {
         let end = self.point_without_uv(p + length * d);
         let curvature = if self.flip_normals { Curvature::Concave } else { Curvature::Convex };
         let mut bound = convex_bound(start, &end, d, length, curvature);
-        // The normal (q − c)/|q − c| at a point q of the segment is rounded with q's coordinates,
-        // by up to ~4ε × coordinates / |q − c| (found by fuzzing: a flipped sphere of radius 3e49
-        // around (−1e300, −1e300, −1e300), tracked from its centre: a point 1.4e284 along the
-        // ray was rounded by 1.5e284, its normal 60° off the segment's d·n range, and the
-        // majorant broken). The range widens by that at the segment's closest approach to the
-        // centre (as the mesh's does at a piece's smallest distance).
-        let (v, scale, _) = self.offset(p);
-        let closest = scale * robust_length(v + (-v.dot(d)).clamp(0.0, length / scale) * d);
         let coordinates = p.abs().max((p + length * d).abs()).max(self.center.abs()).max_element();
-        let rounding = 4.0 * f64::EPSILON * coordinates / closest;
-        if rounding > 0.0 {
-            bound.cos = [(bound.cos[0] - rounding).max(-1.0), (bound.cos[1] + rounding).min(1.0)];
-        }
         // f = |q − c| − r itself is rounded by a few ulps of the coordinates and of r, which for a
         // sphere far larger than its shell exceeds σ (found by fuzzing: a sphere of radius 1.8e308
         // around (0, 2, 1.8e308) answered f = 0 at a point 1e49 outside, σ = 1e50, and the
         // majorant was broken). The bounds of f widen by that (the tracker adds the rounding of
         // the points themselves).
         let f_rounding = 8.0 * f64::EPSILON * coordinates.max(self.radius);
+        // The normal (q − c)/|q − c| at a point q of the segment is rounded with q's coordinates,
+        // by up to ~4ε × coordinates / |q − c| (found by fuzzing: a flipped sphere of radius 3e49
+        // around (−1e300, −1e300, −1e300), tracked from its centre: a point 1.4e284 along the
+        // ray was rounded by 1.5e284, its normal 60° off the segment's d·n range, and the
+        // majorant broken). The range widens by that at the segment's closest approach to the
+        // centre (as the mesh's does at a piece's smallest distance). That distance is at least
+        // r plus the lower bound of f on the segment (r minus the upper bound, flipped), less
+        // twice the rounding of f and of the points: taken without a square root unless it
+        // leaves less than r/2 (a segment reaching toward the centre).
+        let near_side = if self.flip_normals { -bound.f_hi[0].max(bound.f_hi[1]) } else { bound.f_lo[0].min(bound.f_lo[1]) };
+        let at_least = self.radius + near_side - 2.0 * f_rounding;
+        let closest = if at_least > 0.5 * self.radius {
+            at_least
+        } else {
+            let (v, scale, _) = self.offset(p);
+            scale * robust_length(v + (-v.dot(d)).clamp(0.0, length / scale) * d)
+        };
+        let rounding = 4.0 * f64::EPSILON * coordinates / closest;
+        if rounding > 0.0 {
+            bound.cos = [(bound.cos[0] - rounding).max(-1.0), (bound.cos[1] + rounding).min(1.0)];
+        }
         bound.f_lo = bound.f_lo.map(|f| f - f_rounding);
         bound.f_hi = bound.f_hi.map(|f| f + f_rounding);
         Ok(bound)

@@ -123,41 +123,32 @@ impl SegmentBound {
     /// Checks what a surface returned: finite lengths, ordered lines, a cosine range in
     /// `[-1, 1]`, and consistency with the known value `f0` at the start. `what` names the
     /// surface in the message.
+    /// (Inlined, with each message formatted out of line: the check is on every segment.)
     #[inline]
     pub fn validate(&self, asked: f64, f0: f64, what: &str) -> Result<()> {
-        // 1e-9 relative slack: hosts compute the bound and the point in different roundings.
-        let slack = 1e-9 * (1.0 + f0.abs());
-        let usable = self.length > 0.0
-            && self.length <= asked
-            && !self.f_lo.iter().any(|v| v.is_nan() || *v == f64::INFINITY)
-            && !self.f_hi.iter().any(|v| v.is_nan() || *v == f64::NEG_INFINITY)
-            && !(self.f_lo[0] > f0 + slack || self.f_hi[0] < f0 - slack)
-            && self.cos[0] >= -1.0 - 1e-9
-            && self.cos[1] <= 1.0 + 1e-9
-            && self.cos[0] <= self.cos[1];
-        // (Inlined, with the messages out of line: the check is on every segment.)
-        if usable {
-            Ok(())
-        } else {
-            Err(self.unusable(asked, f0, slack, what))
-        }
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn unusable(&self, asked: f64, f0: f64, slack: f64, what: &str) -> Error {
-        let bad = |m: String| Error::new(ErrorKind::InvalidArgument, format!("{what}: segment bound {m}"));
         if !(self.length > 0.0 && self.length <= asked) {
-            return bad(format!("length must lie in (0, {asked}], got {}", self.length));
+            return Err(bad_bound(what, format_args!("length must lie in (0, {asked}], got {}", self.length)));
         }
         if self.f_lo.iter().any(|v| v.is_nan() || *v == f64::INFINITY) || self.f_hi.iter().any(|v| v.is_nan() || *v == f64::NEG_INFINITY) {
-            return bad(format!("f_lo must be < +inf and f_hi > -inf, not NaN; got f_lo {:?}, f_hi {:?}", self.f_lo, self.f_hi));
+            return Err(bad_bound(what, format_args!("f_lo must be < +inf and f_hi > -inf, not NaN; got f_lo {:?}, f_hi {:?}", self.f_lo, self.f_hi)));
         }
+        // 1e-9 relative slack: hosts compute the bound and the point in different roundings.
+        let slack = 1e-9 * (1.0 + f0.abs());
         if self.f_lo[0] > f0 + slack || self.f_hi[0] < f0 - slack {
-            return bad(format!("[{}, {}] at the start does not contain f = {f0}", self.f_lo[0], self.f_hi[0]));
+            return Err(bad_bound(what, format_args!("[{}, {}] at the start does not contain f = {f0}", self.f_lo[0], self.f_hi[0])));
         }
-        bad(format!("cos range must be an ordered range within [-1, 1], got {:?}", self.cos))
+        if !(self.cos[0] >= -1.0 - 1e-9 && self.cos[1] <= 1.0 + 1e-9 && self.cos[0] <= self.cos[1]) {
+            return Err(bad_bound(what, format_args!("cos range must be an ordered range within [-1, 1], got {:?}", self.cos)));
+        }
+        Ok(())
     }
+}
+
+/// The error of a segment bound that [`SegmentBound::validate`] refuses, formatted here.
+#[cold]
+#[inline(never)]
+fn bad_bound(what: &str, problem: std::fmt::Arguments) -> Error {
+    Error::new(ErrorKind::InvalidArgument, format!("{what}: segment bound {problem}"))
 }
 
 fn line(ends: [f64; 2], length: f64) -> (f64, f64) {

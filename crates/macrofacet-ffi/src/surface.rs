@@ -428,11 +428,16 @@ impl SurfaceVisitor for BuildEnclosure {
 
 /// A closed triangle mesh enclosing the region `f < level` of a surface (e.g. the level
 /// `mf_medium_shell_top` of a medium): the boundary a host gives its ray tracer so that rays find
-/// the medium without marching the signed distance. Conservative (the whole region is inside),
-/// watertight, outward-facing, within one cell diagonal of the level set (L of them for an SDF
-/// grid whose interpolation is L-Lipschitz); made of grid cells of about `cell_size` (0: 1/128 of
-/// the surface's largest extent, or 1/8 of a larger `level`; at most 512 cells along an axis, at
-/// least 1e5 ulps of the largest coordinate and 1e-53).
+/// the medium without marching the signed distance. Conservative (the whole region is inside,
+/// also after rounding the vertices to `float`), watertight, outward-facing, free of
+/// self-intersections. With `cell_size` 0 and a mesh surface (`level > 0`): the mesh itself with
+/// its vertices moved out along their normals, as many triangles, within about `level / cos θ`
+/// of the level set (θ: the largest angle between a vertex normal and its faces), when that
+/// verifies (clearance from every face, no faces crossing, winding once around the mesh).
+/// Otherwise made of grid cells of about `cell_size` (0: 1/128 of the surface's largest extent,
+/// or 1/8 of a larger `level`; at most 512 cells along an axis, at least 1e5 ulps of the largest
+/// coordinate and 1e-53), within one cell diagonal of the level set (L of them for an SDF grid
+/// whose interpolation is L-Lipschitz).
 /// Needs a surface with a finite bounding box.
 pub struct mf_enclosure {
     positions: Vec<f64>,

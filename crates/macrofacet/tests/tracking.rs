@@ -564,33 +564,57 @@ fn crossings(positions: &[DVec3], triangles: &[[u32; 3]], o: DVec3, d: DVec3) ->
 #[test]
 fn enclosure_contains_the_region() {
     // Every point with f < level lies inside the enclosure (odd crossing count along a random
-    // direction), for a sphere, a smooth torus mesh and a sharp cube, thin and thick levels.
+    // direction): random points of the surface's box, and points pushed to just below the level
+    // set; every point of the enclosure's faces has f >= level. For a sphere (the voxel
+    // enclosure), a smooth torus mesh, a sharp cube, an L-shaped prism with a reflex edge (each
+    // the mesh's own faces moved out), and a U-shaped prism whose slot is narrower than twice the
+    // thick level (the offset faces would cross: the voxel enclosure), thin and thick levels.
     let torus = mesh_surface(&meshes::torus(1.0, 0.4, 32, 16));
     let cube = mesh_surface(&meshes::cube());
+    let l_prism = mesh_surface(&meshes::l_prism());
+    let slot = mesh_surface(&meshes::prism(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.51, 1.0), (0.51, 0.3), (0.49, 0.3), (0.49, 1.0), (0.0, 1.0)], 1.0));
     let sphere = Sphere::new(DVec3::new(0.2, 0.0, -0.1), 0.8, false, DVec3::Z).unwrap();
-    fn check<S: MeanSurface>(name: &str, s: &S, level: f64, seed: u64) {
+    fn check<S: MeanSurface>(name: &str, s: &S, level: f64, offset: bool, seed: u64) {
         let start = std::time::Instant::now();
         let e = macrofacet::surface::enclosure(s, level, 0.0).unwrap();
         let built = start.elapsed().as_secs_f64();
+        assert_eq!(e.cell == 0.0, offset, "{name}, level {level}: the offset enclosure was{} expected", if offset { "" } else { " not" });
         let b = s.bounding_box().grown(level + 2.0 * e.cell);
         let mut rng = Pcg32::new(seed, 0);
-        let mut inside = 0;
-        for _ in 0..1000 {
-            let p = b.min + (b.max - b.min) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let (mut inside, mut near) = (0, 0);
+        // Directions with irrational-ish components avoid edges of the axis-aligned faces.
+        let d = DVec3::new(0.5377, 0.8131, 0.2231).normalize();
+        for k in 0..2000 {
+            let mut p = b.min + (b.max - b.min) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            if k % 2 == 1 {
+                // Along the gradient to f = level (1 − u³): the shell's top, where a loose offset
+                // would leave points out.
+                let q = s.point(p).unwrap();
+                p += (level * (1.0 - rng.next_f64().powi(3)) - q.f) * q.normal;
+                near += 1;
+            }
             let f = s.point(p).unwrap().f;
             if f < level {
                 inside += 1;
-                // Directions with irrational-ish components avoid edges of the axis-aligned faces.
-                let d = DVec3::new(0.5377, 0.8131, 0.2231).normalize();
                 assert_eq!(crossings(&e.positions, &e.triangles, p, d) % 2, 1, "{name}: point {p} with f = {f} < {level} is outside the enclosure");
             }
         }
-        println!("{name}, level {level}: {} triangles, cell {:.4}, built in {built:.2} s, {inside} region points inside", e.triangles.len(), e.cell);
+        for _ in 0..2000 {
+            let t = e.triangles[(rng.next_f64() * e.triangles.len() as f64) as usize].map(|i| e.positions[i as usize]);
+            let (u, v) = (rng.next_f64(), rng.next_f64());
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            let p = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]);
+            let f = s.point(p).unwrap().f;
+            assert!(f >= level, "{name}: the enclosure's point {p} has f = {f} < {level}");
+        }
+        println!("{name}, level {level}: {} triangles, cell {:.4}, built in {built:.2} s, {inside} region points inside ({near} pushed to the top)", e.triangles.len(), e.cell);
     }
     for level in [0.003, 0.15] {
-        check("torus", &torus, level, 1);
-        check("cube", &cube, level, 2);
-        check("sphere", &sphere, level, 3);
+        check("torus", &torus, level, true, 1);
+        check("cube", &cube, level, true, 2);
+        check("L prism", &l_prism, level, true, 4);
+        check("slot", &slot, level, level < 0.01, 5);
+        check("sphere", &sphere, level, false, 3);
     }
 }
 

@@ -9,6 +9,12 @@
 //! outside it), watertight and free of self-intersections; it lies within `L` cell diagonals of
 //! the level set. Blocks of cells are halved only where the same
 //! bound at their centre leaves them undecided, so the queries follow the level set.
+//!
+//! With the default cell, a surface that can build a tighter enclosure and prove it
+//! conservative gives that instead ([`MeanSurface::offset_enclosure`]): a triangle mesh's own
+//! faces moved out along its vertex normals (`mesh/offset.rs`), which lies within about
+//! `level / cos θ` of the level set rather than a cell diagonal (the thin torus anchor: 3,072
+//! triangles whose vertices lie within 1e-4 of the shell's top, instead of 101,360 within 0.038).
 
 use super::MeanSurface;
 use crate::error::{Error, ErrorKind, Result};
@@ -43,9 +49,10 @@ pub struct Enclosure {
     pub cell: f64,
 }
 
-/// The enclosure of `f < level` with cells of about `cell` (0: 1/128 of the surface's largest
-/// extent, or 1/8 of a larger level: `LEVEL_CELLS`). The surface must have a finite bounding
-/// box.
+/// The enclosure of `f < level` with cells of about `cell` (0: the surface's own offset
+/// enclosure where it has one, [`MeanSurface::offset_enclosure`], with `cell = 0` in the result;
+/// else 1/128 of the surface's largest extent, or 1/8 of a larger level: `LEVEL_CELLS`). The
+/// surface must have a finite bounding box.
 pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<Enclosure> {
     let invalid = |m: String| Error::new(ErrorKind::InvalidArgument, m);
     if !level.is_finite() {
@@ -57,6 +64,12 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
     let bounds = surface.bounding_box();
     if !(bounds.min.is_finite() && bounds.max.is_finite()) {
         return Err(invalid("the surface is unbounded: an enclosure needs a finite bounding box".into()));
+    }
+    // The default cell asks for the tightest enclosure: the surface's own where it has one.
+    if cell == 0.0 {
+        if let Some(offset) = surface.offset_enclosure(level) {
+            return Ok(offset);
+        }
     }
     // The region lies within `level` of the box (f is a signed distance); one cell of margin
     // keeps the enclosure off the region's boundary.

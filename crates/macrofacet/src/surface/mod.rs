@@ -280,6 +280,13 @@ pub trait MeanSurface {
     /// is a signed distance, the box grown by `top` contains the medium's region `f < top`.
     /// [`Aabb::EVERYTHING`] when the interior is unbounded.
     fn bounding_box(&self) -> Aabb;
+
+    /// An enclosure of `f < level` tighter than the grid's of [`enclosure`], when the surface
+    /// can build one and prove it conservative (a mesh: its own faces moved out, `mesh/offset.rs`);
+    /// `None` otherwise.
+    fn offset_enclosure(&self, _level: f64) -> Option<Enclosure> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,306 @@
+//! A mesh's own enclosure: the mesh with its vertices moved out along their angle-weighted
+//! normals, far enough that every face of the result lies at least `level` from the mesh, then
+//! verified. It has the mesh's triangles (a voxel enclosure of the thin torus anchor has 33 times
+//! as many) and lies within about `level / cos θ` of the level set, where θ is the largest angle
+//! between a vertex's normal and its faces' (a cell diagonal for the voxel one: 13 times the thin
+//! torus's shell), so that a ray enters the medium where the shell begins instead of stepping
+//! down across the gap (seeds/000 Sec. 4: the medium's region is `f < kσ`).
+//!
+//! Offsetting a vertex by `h = L / min cos` puts it at least `L` above the planes of its faces
+//! (its plane distance to face `g` is `h n_v·n_g`), and since the plane distance is linear over a
+//! triangle, every offset face lies at least `L` above the planes of the faces around it. That
+//! alone proves nothing about the rest of the mesh, nor about the offset faces' arrangement, so
+//! the result is kept only when it passes three checks; otherwise the caller builds the voxel
+//! enclosure ([`crate::surface::enclosure`]):
+//! - *clearance*: every offset face lies at least `level` (plus a margin) from every face of the
+//!   mesh, by the plane bound or else the exact triangle–triangle distance;
+//! - *embedding*: no two offset faces meet beyond the edge or vertex they share, and none turned
+//!   over (its normal within 60° of its face's);
+//! - *inside*: the offset mesh winds once around a vertex of each connected part of the mesh
+//!   (generalized winding number, van Oosterom & Strackee 1983).
+//!
+//! A closed, embedded, outward surface that avoids the connected region `f < level` and winds
+//! once around a point of it encloses all of it: that is what a host's ray tracer needs.
+
+use super::bvh::Bvh;
+use super::edge::segment_distance;
+use super::triangle::Triangle;
+use super::TriangleMesh;
+use crate::surface::Enclosure;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// The offset stops where a vertex's normal leaves one of its faces' by more than this cosine
+/// (78°): a spike or a blade, whose offset would have to grow by more than 5 times the level.
+const MIN_COS: f64 = 0.2;
+/// Offset faces within this many triangles of one another (their own, and the mesh's) are more
+/// than a search can compare cheaply: the voxel enclosure then.
+const MAX_NEIGHBOURS: usize = 256;
+/// Connected parts of the mesh each cost one pass over the triangles for the winding number;
+/// beyond this many the voxel enclosure is cheaper.
+const MAX_PARTS: usize = 64;
+/// Offset faces whose normals differ by more than this cosine across their shared edge have
+/// folded onto each other.
+const FOLDED_COS: f64 = -0.9;
+/// An offset face whose normal turned from its face's by more than this cosine is rejected.
+const TURNED_COS: f64 = 0.5;
+
+impl TriangleMesh {
+    /// The offset enclosure of `f < level` (see the module documentation), or `None` when it
+    /// does not verify (or `level <= 0`): then the voxel enclosure. The offset clears the mesh by
+    /// `level` plus a margin of `1e-3 level` and of 16 single-precision ulps of the largest
+    /// coordinate, so that a host's `f32` copy of the vertices still encloses the region.
+    pub(crate) fn offset_enclosure(&self, level: f64) -> Option<Enclosure> {
+        if !(level > 0.0 && level.is_finite()) {
+            return None;
+        }
+        let magnitude = self.bounds.min.abs().max(self.bounds.max.abs()).max_element();
+        let required = level + 1e-3 * level + 16.0 * f64::from(f32::EPSILON) * magnitude;
+        // Offset for twice the margin; the checks ask for one (the rest absorbs their rounding).
+        let target = 2.0 * required - level;
+
+        // Per vertex: the least cosine between its normal and its faces' normals.
+        let mut least_cos = vec![f64::INFINITY; self.vertices.len()];
+        for (t, corners) in self.triangles.iter().zip(&self.corners) {
+            if t.n == DVec3::ZERO {
+                continue;
+            }
+            for &v in corners {
+                least_cos[v as usize] = least_cos[v as usize].min(self.vertex_normals[v as usize].dot(t.n));
+            }
+        }
+        let mut offset = self.vertices.clone();
+        for (v, q) in offset.iter_mut().enumerate() {
+            let c = least_cos[v];
+            if c == f64::INFINITY {
+                continue; // no face: not part of the mesh (or only of degenerate faces)
+            }
+            if !(c >= MIN_COS) {
+                return None;
+            }
+            *q += (target / c) * self.vertex_normals[v];
+        }
+        if offset.iter().any(|q| !q.is_finite()) {
+            return None;
+        }
+        let faces: Vec<Triangle> = self
+            .corners
+            .iter()
+            .map(|c| {
+                let p = c.map(|v| offset[v as usize]);
+                Triangle::new(p, (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::ZERO))
+            })
+            .collect();
+        // Turned over: the offset face must face the way its face does.
+        if self.triangles.iter().zip(&faces).any(|(t, o)| t.n != DVec3::ZERO && !(o.n.dot(t.n) >= TURNED_COS)) {
+            return None;
+        }
+        let mut near = Vec::new();
+        if !faces.iter().all(|o| self.clears(o, required, &mut near)) {
+            return None;
+        }
+        if !embedded(&faces, &self.corners, magnitude, &mut near) {
+            return None;
+        }
+        if !self.winds_once(&faces) {
+            return None;
+        }
+        // The vertices the faces use, numbered in order of first use.
+        let mut number = vec![u32::MAX; offset.len()];
+        let mut out = Enclosure::default();
+        for c in &self.corners {
+            out.triangles.push(c.map(|v| {
+                if number[v as usize] == u32::MAX {
+                    number[v as usize] = out.positions.len() as u32;
+                    out.positions.push(offset[v as usize]);
+                }
+                number[v as usize]
+            }));
+        }
+        Some(out)
+    }
+
+    /// True when the offset face `o` lies at least `required` from every face of the mesh.
+    fn clears(&self, o: &Triangle, required: f64, near: &mut Vec<u32>) -> bool {
+        if !self.bvh.within(&self.triangles, o.centre, o.radius + required, MAX_NEIGHBOURS, near) {
+            return false;
+        }
+        near.iter().all(|&g| {
+            let g = &self.triangles[g as usize];
+            // The distance to a triangle is at least the distance to its plane.
+            let above_plane = g.n != DVec3::ZERO && o.p.iter().all(|&q| g.n.dot(q - g.p[0]) >= required);
+            above_plane || triangle_distance(o, g) >= required
+        })
+    }
+
+    /// True when the offset mesh `faces` winds once around a vertex of each connected part of
+    /// the mesh (each such vertex has `f = 0 < level`).
+    fn winds_once(&self, faces: &[Triangle]) -> bool {
+        // Parts by union–find over the faces' corners.
+        let mut parent: Vec<u32> = (0..self.vertices.len() as u32).collect();
+        fn root(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                parent[v as usize] = parent[parent[v as usize] as usize];
+                v = parent[v as usize];
+            }
+            v
+        }
+        for c in &self.corners {
+            for k in 1..3 {
+                let (a, b) = (root(&mut parent, c[0]), root(&mut parent, c[k]));
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+        let mut tested = Vec::new();
+        for c in &self.corners {
+            let r = root(&mut parent, c[0]);
+            if tested.contains(&r) {
+                continue;
+            }
+            if tested.len() == MAX_PARTS {
+                return false;
+            }
+            tested.push(r);
+            let p = self.vertices[c[0] as usize];
+            let winding: f64 = faces.iter().map(|o| solid_angle(o, p)).sum::<f64>() / (4.0 * PI);
+            if !((winding - 1.0).abs() < 0.25) {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// True when no two of the offset `faces` meet beyond the corners they share (`corners`: their
+/// vertex ids): apart, they keep more than a rounding distance; sharing a vertex, neither's
+/// opposite edge reaches the other (two triangles that share one vertex and overlap along a
+/// segment from it have the segment's far end on one's opposite edge); sharing an edge, they have
+/// not folded onto each other.
+fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, near: &mut Vec<u32>) -> bool {
+    let apart = 1e-9 * magnitude;
+    let (bvh, order) = Bvh::build(faces);
+    let sorted: Vec<Triangle> = order.iter().map(|&i| faces[i as usize].clone()).collect();
+    faces.iter().enumerate().all(|(a, fa)| {
+        if !bvh.within(&sorted, fa.centre, fa.radius + apart, MAX_NEIGHBOURS, near) {
+            return false;
+        }
+        near.iter().map(|&k| order[k as usize] as usize).filter(|&b| b > a).all(|b| {
+            let fb = &faces[b];
+            let shared: Vec<usize> = (0..3).filter(|&i| corners[b].contains(&corners[a][i])).collect();
+            match shared.len() {
+                0 => triangle_distance(fa, fb) > apart,
+                1 => {
+                    let opposite = |c: &[u32; 3], f: &Triangle, v: u32| {
+                        let i = c.iter().position(|&x| x == v).unwrap_or(0);
+                        (f.p[(i + 1) % 3], f.p[(i + 2) % 3])
+                    };
+                    let v = corners[a][shared[0]];
+                    let (a0, a1) = opposite(&corners[a], fa, v);
+                    let (b0, b1) = opposite(&corners[b], fb, v);
+                    segment_distance(fb, a0, a1) > apart && segment_distance(fa, b0, b1) > apart
+                }
+                2 => fa.n.dot(fb.n) > FOLDED_COS,
+                _ => false,
+            }
+        })
+    })
+}
+
+/// The distance between two triangles: where they do not meet, the closest pair has a point on
+/// an edge of one of them; where they do, an edge of one crosses the other.
+fn triangle_distance(a: &Triangle, b: &Triangle) -> f64 {
+    (0..3).map(|k| segment_distance(b, a.p[k], a.p[(k + 1) % 3]).min(segment_distance(a, b.p[k], b.p[(k + 1) % 3]))).fold(f64::INFINITY, f64::min)
+}
+
+/// The signed solid angle of triangle `t` seen from `p` (positive where `p` lies behind its
+/// counter-clockwise face), van Oosterom & Strackee (1983).
+fn solid_angle(t: &Triangle, p: DVec3) -> f64 {
+    let [a, b, c] = t.p.map(|q| q - p);
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let numerator = a.dot(b.cross(c));
+    let denominator = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    2.0 * numerator.atan2(denominator)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::triangle::{closest_on_triangle, from_corners};
+    use super::*;
+    use crate::rng::Pcg32;
+    use crate::surface::MeanSurface;
+
+    /// The triangle–triangle distance is the least over dense samples of one triangle against
+    /// the other (which can only be larger), and 0 for triangles that cross.
+    #[test]
+    fn triangle_distance_matches_sampling() {
+        let mut rng = Pcg32::new(3, 8);
+        let mut point = |scale: f64| DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5) * scale;
+        for k in 0..300 {
+            let (a, b) = (from_corners([point(2.0), point(2.0), point(2.0)]), from_corners([point(3.0), point(3.0), point(3.0)]));
+            let exact = triangle_distance(&a, &b);
+            let n = 60;
+            let mut sampled = f64::INFINITY;
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    let q = a.p[0] + (i as f64 / n as f64) * (a.p[1] - a.p[0]) + (j as f64 / n as f64) * (a.p[2] - a.p[0]);
+                    sampled = sampled.min(closest_on_triangle(&b, q, 0).distance_sq.sqrt());
+                }
+            }
+            let step = (a.p[1] - a.p[0]).length().max((a.p[2] - a.p[0]).length()) / n as f64;
+            assert!(exact <= sampled + 1e-12 && exact >= sampled - step, "case {k}: {exact} against the sampled {sampled}");
+        }
+        let flat = from_corners([DVec3::ZERO, DVec3::X, DVec3::Y]);
+        let through = from_corners([DVec3::new(0.2, 0.2, -1.0), DVec3::new(0.2, 0.2, 1.0), DVec3::new(2.0, 2.0, 0.0)]);
+        assert!(triangle_distance(&flat, &through) < 1e-15);
+    }
+
+    /// Apart, sharing a vertex, sharing an edge: embedded or not.
+    #[test]
+    fn embedding_finds_faces_that_meet() {
+        let t = |p: [DVec3; 3]| from_corners(p);
+        let (o, x, y, z) = (DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z);
+        let cases = [
+            // Apart, then crossing.
+            (vec![t([o, x, y]), t([o + z, x + z, y + z])], vec![[0, 1, 2], [3, 4, 5]], true),
+            (vec![t([o, x, y]), t([DVec3::new(0.2, 0.2, -1.0), DVec3::new(0.2, 0.2, 1.0), DVec3::new(2.0, 2.0, 0.0)])], vec![[0, 1, 2], [3, 4, 5]], false),
+            // Sharing vertex 0: a fan, then one folded through the other.
+            (vec![t([o, x, y]), t([o, -x, -y])], vec![[0, 1, 2], [0, 3, 4]], true),
+            (vec![t([o, x, y]), t([o, DVec3::new(1.0, 0.5, 0.3), DVec3::new(1.0, 0.5, -0.3)])], vec![[0, 1, 2], [0, 3, 4]], false),
+            // Sharing edge 0–1: a hinge, then folded flat onto the first.
+            (vec![t([o, x, y]), t([x, o, -y + z])], vec![[0, 1, 2], [1, 0, 3]], true),
+            (vec![t([o, x, y]), t([x, o, DVec3::new(0.4, 0.4, 1e-3)])], vec![[0, 1, 2], [1, 0, 3]], false),
+        ];
+        let mut near = Vec::new();
+        for (k, (faces, corners, expected)) in cases.iter().enumerate() {
+            assert_eq!(embedded(faces, corners, 1.0, &mut near), *expected, "case {k}");
+        }
+    }
+
+    /// The winding number of a closed tetrahedron is 1 inside and 0 outside.
+    #[test]
+    fn solid_angles_wind_once_around_the_inside() {
+        let (o, x, y, z) = (DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z);
+        let faces = [[o, y, x], [o, x, z], [o, z, y], [x, y, z]].map(from_corners);
+        let winding = |p: DVec3| faces.iter().map(|f| solid_angle(f, p)).sum::<f64>() / (4.0 * PI);
+        assert!((winding(DVec3::splat(0.2)) - 1.0).abs() < 1e-12);
+        assert!(winding(DVec3::splat(2.0)).abs() < 1e-12);
+    }
+
+    /// A spike (a vertex whose normal leaves a face by more than 78°) and a level that is not
+    /// positive get no offset enclosure; a tetrahedron does, clearing the level.
+    #[test]
+    fn offset_needs_blunt_vertices_and_a_positive_level() {
+        let tetrahedron = |apex: f64| {
+            let p = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(-0.5, 0.8660254, 0.0), DVec3::new(-0.5, -0.8660254, 0.0), DVec3::new(0.0, 0.0, apex)];
+            TriangleMesh::new(&p, &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], None, None).unwrap()
+        };
+        let blunt = tetrahedron(1.0);
+        let e = blunt.offset_enclosure(0.01).expect("a blunt tetrahedron offsets");
+        assert_eq!((e.positions.len(), e.triangles.len(), e.cell), (4, 4, 0.0));
+        for q in &e.positions {
+            assert!(blunt.point(*q).unwrap().f >= 0.01);
+        }
+        assert!(blunt.offset_enclosure(0.0).is_none() && blunt.offset_enclosure(-0.1).is_none());
+        assert!(tetrahedron(40.0).offset_enclosure(0.01).is_none());
+    }
+}

@@ -18,7 +18,7 @@ def main(argv=None):
     enc.add_argument("--scale", type=float, default=1.0,
                      help="the uniform scale of the mean surface's to_world (the enclosure is in the file's units)")
     enc.add_argument("--cell-size", type=float, default=0.0,
-                     help="grid cell in scene units (0: 1/128 of the mesh's largest extent)")
+                     help="grid cell in scene units (0: the mesh's own faces moved out when that verifies, else cells of 1/128 of its largest extent)")
     a = ap.parse_args(argv)
     try:
         n = write_enclosure(a.mesh, a.out, a.sigma, a.shell_extent, a.scale, a.cell_size)

@@ -1,6 +1,8 @@
 """The boundary of a mesh mean surface: a closed triangle mesh around the region f < level, from
 the library's mf_surface_enclosure (conservative: the whole region is inside; watertight,
-outward-facing, within one grid cell of the level set), written as a binary PLY.
+outward-facing; with cell size 0 the mesh's own faces moved out along its vertex normals when that
+verifies, else the faces of grid cells, within one cell of the level set), written as a binary
+PLY.
 
 A macrofacet medium fills f < k sigma around its mean surface; rays enter it through the scene's
 boundary shape, which must contain that region. For a sphere of radius r the boundary is the
@@ -55,7 +57,8 @@ def _check(status, what):
 def enclosure(positions, faces, level, cell_size=0.0):
     """The enclosure of f < level around the closed mesh (positions: 3n floats, faces: 3m vertex
     indices, counter-clockwise seen from outside). Returns (positions, faces) as lists; level in
-    the mesh's units; cell_size 0 is 1/128 of the mesh's largest extent."""
+    the mesh's units; cell_size 0 asks for the mesh's own faces moved out (else cells of 1/128 of
+    the mesh's largest extent)."""
     lib = _library()
     nv, nf = len(positions) // 3, len(faces) // 3
     pos = (ctypes.c_double * (3 * nv))(*positions)

@@ -16,17 +16,20 @@
 //!   mesh, by the plane bound or else the exact triangle–triangle distance;
 //! - *embedding*: no two offset faces meet beyond the edge or vertex they share, and none turned
 //!   over (its normal within 60° of its face's);
-//! - *inside*: the offset mesh winds once around a vertex of each connected part of the mesh
-//!   (generalized winding number, van Oosterom & Strackee 1983).
+//! - *outside, around*: each connected part of the offset lies outside the mesh (`f >= level` at
+//!   one of its vertices; with the clearance, `|f| >= level` all over it, so `f` cannot change
+//!   sign on it) and winds once around a vertex of the mesh's part (generalized winding number,
+//!   van Oosterom & Strackee 1983).
 //!
-//! A closed, embedded, outward surface that avoids the connected region `f < level` and winds
-//! once around a point of it encloses all of it: that is what a host's ray tracer needs.
+//! A closed, embedded surface that avoids the region `f < level` (each of whose connected parts
+//! holds a part of the mesh) and winds once around a point of each encloses all of it: that is
+//! what a host's ray tracer needs.
 
 use super::bvh::Bvh;
 use super::edge::segment_distance;
 use super::triangle::Triangle;
 use super::TriangleMesh;
-use crate::surface::Enclosure;
+use crate::surface::{Enclosure, MeanSurface};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -102,7 +105,7 @@ impl TriangleMesh {
         if !embedded(&faces, &self.corners, magnitude, &mut near) {
             return None;
         }
-        if !self.winds_once(&faces) {
+        if !self.encloses(&faces, &offset, level) {
             return None;
         }
         // The vertices the faces use, numbered in order of first use.
@@ -133,9 +136,10 @@ impl TriangleMesh {
         })
     }
 
-    /// True when the offset mesh `faces` winds once around a vertex of each connected part of
-    /// the mesh (each such vertex has `f = 0 < level`).
-    fn winds_once(&self, faces: &[Triangle]) -> bool {
+    /// True when each connected part of the offset mesh `faces` (vertices `offset`) lies
+    /// outside the mesh, at `f >= level` at its first vertex, and winds once around that vertex
+    /// of the mesh (where `f = 0 < level`).
+    fn encloses(&self, faces: &[Triangle], offset: &[DVec3], level: f64) -> bool {
         // Parts by union–find over the faces' corners.
         let mut parent: Vec<u32> = (0..self.vertices.len() as u32).collect();
         fn root(parent: &mut [u32], mut v: u32) -> u32 {
@@ -161,6 +165,9 @@ impl TriangleMesh {
                 return false;
             }
             tested.push(r);
+            if !self.point(offset[c[0] as usize]).is_ok_and(|q| q.f >= level) {
+                return false;
+            }
             let p = self.vertices[c[0] as usize];
             let winding: f64 = faces.iter().map(|o| solid_angle(o, p)).sum::<f64>() / (4.0 * PI);
             if !((winding - 1.0).abs() < 0.25) {
@@ -227,7 +234,6 @@ mod tests {
     use super::super::triangle::{closest_on_triangle, from_corners};
     use super::*;
     use crate::rng::Pcg32;
-    use crate::surface::MeanSurface;
 
     /// The triangle–triangle distance is the least over dense samples of one triangle against
     /// the other (which can only be larger), and 0 for triangles that cross.
@@ -284,6 +290,21 @@ mod tests {
         let winding = |p: DVec3| faces.iter().map(|f| solid_angle(f, p)).sum::<f64>() / (4.0 * PI);
         assert!((winding(DVec3::splat(0.2)) - 1.0).abs() < 1e-12);
         assert!(winding(DVec3::splat(2.0)).abs() < 1e-12);
+    }
+
+    /// Faces that clear the mesh but lie inside it (a cube's shrunk copy) do not enclose the
+    /// region; the grown copy does.
+    #[test]
+    fn an_offset_inside_the_mesh_does_not_enclose() {
+        let corners: Vec<DVec3> = (0..8).map(|i| DVec3::new([-1.0, 1.0][i & 1], [-1.0, 1.0][(i >> 1) & 1], [-1.0, 1.0][i >> 2])).collect();
+        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let triangles: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+        let cube = TriangleMesh::new(&corners, &triangles, None, None).unwrap();
+        for (scale, expected) in [(0.7, false), (1.3, true)] {
+            let offset: Vec<DVec3> = cube.vertices.iter().map(|&v| v * scale).collect();
+            let faces: Vec<Triangle> = cube.corners.iter().map(|c| from_corners(c.map(|v| offset[v as usize]))).collect();
+            assert_eq!(cube.encloses(&faces, &offset, 0.1), expected, "scale {scale}");
+        }
     }
 
     /// A spike (a vertex whose normal leaves a face by more than 78°) and a level that is not

@@ -567,11 +567,13 @@ fn enclosure_contains_the_region() {
     // direction): random points of the surface's box, and points pushed to just below the level
     // set; every point of the enclosure's faces has f >= level. For a sphere (the voxel
     // enclosure), a smooth torus mesh, a sharp cube, an L-shaped prism with a reflex edge (each
-    // the mesh's own faces moved out), and a U-shaped prism whose slot is narrower than twice the
-    // thick level (the offset faces would cross: the voxel enclosure), thin and thick levels.
+    // the mesh's own faces moved out), a lumpy torus (saddles and concave bumps, whose faces
+    // moved out by the thick level turn over: the voxel enclosure there) and a U-shaped prism
+    // whose slot is narrower than twice the thick level (likewise), thin and thick levels.
     let torus = mesh_surface(&meshes::torus(1.0, 0.4, 32, 16));
     let cube = mesh_surface(&meshes::cube());
     let l_prism = mesh_surface(&meshes::l_prism());
+    let lumpy = mesh_surface(&meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15));
     let slot = mesh_surface(&meshes::prism(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.51, 1.0), (0.51, 0.3), (0.49, 0.3), (0.49, 1.0), (0.0, 1.0)], 1.0));
     let sphere = Sphere::new(DVec3::new(0.2, 0.0, -0.1), 0.8, false, DVec3::Z).unwrap();
     fn check<S: MeanSurface>(name: &str, s: &S, level: f64, offset: bool, seed: u64) {
@@ -613,6 +615,7 @@ fn enclosure_contains_the_region() {
         check("torus", &torus, level, true, 1);
         check("cube", &cube, level, true, 2);
         check("L prism", &l_prism, level, true, 4);
+        check("lumpy torus", &lumpy, level, level < 0.01, 6);
         check("slot", &slot, level, level < 0.01, 5);
         check("sphere", &sphere, level, false, 3);
     }

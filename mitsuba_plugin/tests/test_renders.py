@@ -367,7 +367,7 @@ def main():
 
     run = lambda group: a.only in (None, group)  # noqa: E731
     fresh = os.path.join(a.work, "fuzzy_torus_boundary.ply")
-    macrofacet_mitsuba.write_enclosure(os.path.join(ROOT, "scenes", "torus.obj"), fresh, sigma=0.08, scale=2, cell_size=0.1)
+    macrofacet_mitsuba.write_enclosure(os.path.join(ROOT, "scenes", "torus.obj"), fresh, sigma=0.08, scale=2)
     with open(fresh, "rb") as f1, open(os.path.join(SCENES, "fuzzy_torus_boundary.ply"), "rb") as f2:
         check(f1.read() == f2.read(), "scenes/mitsuba/fuzzy_torus_boundary.ply is the enclosure tool's output "
                                       "(regenerate it with the command in fuzzy_torus.xml)")

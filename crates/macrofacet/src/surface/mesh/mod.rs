@@ -92,10 +92,8 @@ pub struct TriangleMesh {
     /// and offset, a hundred times their rounding): there the direction `p − c` is
     /// meaningless, and the bounds are padded by a multiple of it.
     epsilon: f64,
-    /// The welded vertices (one per distinct position), their angle-weighted normals, and each
-    /// triangle's corners among them: the mesh's connectivity, for [`offset`].
-    vertices: Vec<DVec3>,
-    vertex_normals: Vec<DVec3>,
+    /// Each triangle's corners as welded vertex ids (one per distinct position): the mesh's
+    /// connectivity, for [`offset`].
     corners: Vec<[u32; 3]>,
 }
 
@@ -292,12 +290,7 @@ impl TriangleMesh {
         let regions = FaceRegion::build(&bvh, &triangles, epsilon);
         let welded_corners: Vec<[u32; 3]> = order.iter().map(|&i| corners(&indices[i as usize])).collect();
         let edges = EdgeZone::build(&bvh, &triangles, &welded_corners, epsilon);
-        let mut vertices = vec![DVec3::ZERO; weld.len()];
-        for (&w, &p) in welded.iter().zip(positions) {
-            vertices[w as usize] = p;
-        }
-        let vertex_normals = vertex_pn.iter().map(|&n| rescaled(n).try_normalize().unwrap_or(DVec3::ZERO)).collect();
-        Ok(TriangleMesh { triangles, attributes, bvh, grid, regions, edges, bounds, epsilon, vertices, vertex_normals, corners: welded_corners })
+        Ok(TriangleMesh { triangles, attributes, bvh, grid, regions, edges, bounds, epsilon, corners: welded_corners })
     }
 
     pub fn triangle_count(&self) -> usize {

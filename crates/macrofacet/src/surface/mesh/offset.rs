@@ -31,6 +31,7 @@ use super::triangle::Triangle;
 use super::TriangleMesh;
 use crate::surface::{Enclosure, MeanSurface};
 use glam::DVec3;
+use smallvec::SmallVec;
 use std::f64::consts::PI;
 
 /// The offset stops where a vertex's normal leaves one of its faces' by more than this cosine
@@ -62,17 +63,18 @@ impl TriangleMesh {
         // Offset for twice the margin; the checks ask for one (the rest absorbs their rounding).
         let target = 2.0 * required - level;
 
+        let (vertices, normals) = self.welded_vertices();
         // Per vertex: the least cosine between its normal and its faces' normals.
-        let mut least_cos = vec![f64::INFINITY; self.vertices.len()];
+        let mut least_cos = vec![f64::INFINITY; vertices.len()];
         for (t, corners) in self.triangles.iter().zip(&self.corners) {
             if t.n == DVec3::ZERO {
                 continue;
             }
             for &v in corners {
-                least_cos[v as usize] = least_cos[v as usize].min(self.vertex_normals[v as usize].dot(t.n));
+                least_cos[v as usize] = least_cos[v as usize].min(normals[v as usize].dot(t.n));
             }
         }
-        let mut offset = self.vertices.clone();
+        let mut offset = vertices.clone();
         for (v, q) in offset.iter_mut().enumerate() {
             let c = least_cos[v];
             if c == f64::INFINITY {
@@ -81,7 +83,7 @@ impl TriangleMesh {
             if !(c >= MIN_COS) {
                 return None;
             }
-            *q += (target / c) * self.vertex_normals[v];
+            *q += (target / c) * normals[v];
         }
         if offset.iter().any(|q| !q.is_finite()) {
             return None;
@@ -105,7 +107,7 @@ impl TriangleMesh {
         if !embedded(&faces, &self.corners, magnitude, &mut near) {
             return None;
         }
-        if !self.encloses(&faces, &offset, level) {
+        if !self.encloses(&faces, &vertices, &offset, level) {
             return None;
         }
         // The vertices the faces use, numbered in order of first use.
@@ -123,6 +125,22 @@ impl TriangleMesh {
         Some(out)
     }
 
+    /// The welded vertices (by id, `self.corners`' numbering) and their angle-weighted normals,
+    /// from the triangles' corners and pseudo-normals (where a vertex's faces' normals cancel,
+    /// its corners fall back to their faces' normals, and some face then leaves it by more than
+    /// 90°: no offset, as with no normal at all).
+    fn welded_vertices(&self) -> (Vec<DVec3>, Vec<DVec3>) {
+        let count = self.corners.iter().flatten().max().map_or(0, |&v| v as usize + 1);
+        let (mut vertices, mut normals) = (vec![DVec3::ZERO; count], vec![DVec3::ZERO; count]);
+        for ((t, a), corners) in self.triangles.iter().zip(&self.attributes).zip(&self.corners) {
+            for k in 0..3 {
+                vertices[corners[k] as usize] = t.p[k];
+                normals[corners[k] as usize] = a.vertex_pn[k];
+            }
+        }
+        (vertices, normals)
+    }
+
     /// True when the offset face `o` lies at least `required` from every face of the mesh.
     fn clears(&self, o: &Triangle, required: f64, near: &mut Vec<u32>) -> bool {
         if !self.bvh.within(&self.triangles, o.centre, o.radius + required, MAX_NEIGHBOURS, near) {
@@ -136,12 +154,12 @@ impl TriangleMesh {
         })
     }
 
-    /// True when each connected part of the offset mesh `faces` (vertices `offset`) lies
-    /// outside the mesh, at `f >= level` at its first vertex, and winds once around that vertex
-    /// of the mesh (where `f = 0 < level`).
-    fn encloses(&self, faces: &[Triangle], offset: &[DVec3], level: f64) -> bool {
+    /// True when each connected part of the offset mesh `faces` (vertices `offset`, moved from
+    /// the mesh's `vertices`) lies outside the mesh, at `f >= level` at its first vertex, and
+    /// winds once around that vertex of the mesh (where `f = 0 < level`).
+    fn encloses(&self, faces: &[Triangle], vertices: &[DVec3], offset: &[DVec3], level: f64) -> bool {
         // Parts by union–find over the faces' corners.
-        let mut parent: Vec<u32> = (0..self.vertices.len() as u32).collect();
+        let mut parent: Vec<u32> = (0..vertices.len() as u32).collect();
         fn root(parent: &mut [u32], mut v: u32) -> u32 {
             while parent[v as usize] != v {
                 parent[v as usize] = parent[parent[v as usize] as usize];
@@ -168,7 +186,7 @@ impl TriangleMesh {
             if !self.point(offset[c[0] as usize]).is_ok_and(|q| q.f >= level) {
                 return false;
             }
-            let p = self.vertices[c[0] as usize];
+            let p = vertices[c[0] as usize];
             let winding: f64 = faces.iter().map(|o| solid_angle(o, p)).sum::<f64>() / (4.0 * PI);
             if !((winding - 1.0).abs() < 0.25) {
                 return false;
@@ -193,7 +211,8 @@ fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, near: &mut
         }
         near.iter().map(|&k| order[k as usize] as usize).filter(|&b| b > a).all(|b| {
             let fb = &faces[b];
-            let shared: Vec<usize> = (0..3).filter(|&i| corners[b].contains(&corners[a][i])).collect();
+            // (On the stack: this runs for every pair of neighbouring faces.)
+            let shared: SmallVec<[usize; 3]> = (0..3).filter(|&i| corners[b].contains(&corners[a][i])).collect();
             match shared.len() {
                 0 => triangle_distance(fa, fb) > apart,
                 1 => {
@@ -301,9 +320,10 @@ mod tests {
         let triangles: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
         let cube = TriangleMesh::new(&corners, &triangles, None, None).unwrap();
         for (scale, expected) in [(0.7, false), (1.3, true)] {
-            let offset: Vec<DVec3> = cube.vertices.iter().map(|&v| v * scale).collect();
+            let (vertices, _) = cube.welded_vertices();
+            let offset: Vec<DVec3> = vertices.iter().map(|&v| v * scale).collect();
             let faces: Vec<Triangle> = cube.corners.iter().map(|c| from_corners(c.map(|v| offset[v as usize]))).collect();
-            assert_eq!(cube.encloses(&faces, &offset, 0.1), expected, "scale {scale}");
+            assert_eq!(cube.encloses(&faces, &vertices, &offset, 0.1), expected, "scale {scale}");
         }
     }
 

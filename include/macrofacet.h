@@ -140,7 +140,8 @@ typedef enum mf_status {
  * or 1/8 of a larger `level`; at most 512 cells along an axis, at least 1e5 ulps of the largest
  * coordinate and 1e-53), within one cell diagonal of the level set (L of them for an SDF grid
  * whose interpolation is L-Lipschitz).
- * Needs a surface with a finite bounding box.
+ * Needs a surface with a finite bounding box. Its exit level ([`mf_enclosure_exit_level`]) lets
+ * tracking calls find the ray's exit themselves (`mf_track_query::exit_level`).
  */
 typedef struct mf_enclosure mf_enclosure;
 
@@ -547,12 +548,26 @@ typedef struct mf_grid {
 /**
  * One tracking query: the ray `origin + t d` (`d` unit, world space), `t ∈ [0, t_max]`
  * (`t_max` may be `+inf`), inside the medium's region; `seed` drives the call's random numbers.
+ *
+ * `exit_level` 0 (as zero-initialised): the host has cast the ray to its region boundary's
+ * exit and passes that as `t_max`. Otherwise the boundary's exit level
+ * ([`mf_enclosure_exit_level`], or for a host's own boundary a level of `f` that no point it
+ * encloses exceeds; at least `mf_medium_shell_top`): the call then also ends where it finds the
+ * ray outside the boundary, and a ray that passed reports where (`mf_collision::t`,
+ * `mf_transmittance::t`), so the host continues it from there, outside, without a ray cast
+ * for the exit. Only valid where no other geometry lies within `exit_level` of the surface's
+ * bounding box (`mf_surface_bounding_box`): the call tracks the medium wherever the ray goes
+ * until it finds it outside. Same results as the ray cast: the shell's density is zero between
+ * its top and the boundary.
+ *
+ * [`mf_enclosure_exit_level`]: crate::surface::mf_enclosure_exit_level
  */
 typedef struct mf_track_query {
   struct mf_vec3 origin;
   struct mf_vec3 d;
   double t_max;
   uint64_t seed;
+  double exit_level;
 } mf_track_query;
 
 /**
@@ -572,7 +587,7 @@ typedef struct mf_track_stats {
  * The outcome of [`mf_track_free_flight`]. When `scattered`, a real collision happened at
  * `t` (`0 <= t <= t_max`), at `p` where the signed distance is `f` and the local frame of the
  * phase function is `frame`; otherwise the ray passed the segment (the other fields are zero and
- * `t = t_max`). The weight of either outcome is 1: the flakes' albedo is in the phase function.
+ * `t = t_max`, or with an exit level where the ray left the region). The weight of either outcome is 1: the flakes' albedo is in the phase function.
  */
 typedef struct mf_collision {
   bool scattered;
@@ -588,10 +603,13 @@ typedef struct mf_collision {
 } mf_collision;
 
 /**
- * The outcome of [`mf_track_transmittance`]: an unbiased estimate in `[0, 1]`.
+ * The outcome of [`mf_track_transmittance`]: an unbiased estimate in `[0, 1]` over `[0, t]`:
+ * `t = t_max`, or with an exit level where the ray left the region (where the estimate
+ * reached 0, where it did).
  */
 typedef struct mf_transmittance {
   double transmittance;
+  double t;
   struct mf_track_stats stats;
 } mf_transmittance;
 
@@ -1149,6 +1167,19 @@ enum mf_status mf_surface_enclosure(const struct mf_surface *surface,
  * Pointers must be NULL or valid.
  */
 enum mf_status mf_enclosure_mesh(const struct mf_enclosure *enclosure, struct mf_mesh *out_mesh);
+
+/**
+ * A level of `f` above which a point lies outside the enclosure: no point it encloses exceeds
+ * it, nor any point within `float` rounding of it (the vertices as a host copies them, a ray's
+ * origin). Give it as [`mf_track_query`]`::exit_level` to let the tracking calls end at the
+ * ray's exit from the enclosure.
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ *
+ * [`mf_track_query`]: crate::track::mf_track_query
+ */
+enum mf_status mf_enclosure_exit_level(const struct mf_enclosure *enclosure, double *out_level);
 
 /**
  * Releases an enclosure; NULL is a no-op.

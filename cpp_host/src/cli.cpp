@@ -30,7 +30,8 @@ namespace {
 
 const char* kUsage =
     "usage: mfrender scene.xml [-o out.exr] [--spp N] [--seed S] [--threads N] [--max-depth N]\n"
-    "                [-D name=value]... [--shard I/N] [--media-boundaries] [--quiet] [--check]\n"
+    "                [-D name=value]... [--shard I/N] [--media-boundaries] [--cast-exits]\n"
+    "                [--quiet] [--check]\n"
     "                [--help]\n"
     "       mfrender merge -o out.exr part.mfpart...\n"
     "\n"
@@ -48,6 +49,9 @@ const char* kUsage =
     "  --media-boundaries  trace the boundaries of macrofacet media in vacuum as surfaces of the\n"
     "                 BVH, as in scenes with other media (default: such media are tracked along\n"
     "                 every ray without them; the image is the same, to noise, and faster)\n"
+    "  --cast-exits   cast a ray for every exit from a macrofacet medium's region (default: a\n"
+    "                 medium whose boundary the library built and near which nothing else lies\n"
+    "                 finds the exit while it tracks; the image is the same, to noise)\n"
     "  --quiet        no progress bar and no summary line\n"
     "  --check        parse and build the scene, print a summary, do not render; every problem\n"
     "                 of the file is listed (rendering lists them too)\n"
@@ -218,6 +222,8 @@ int mfrender_main(int argc, char** argv) {
                 bopts.max_depth_override = int(parse_int_arg(a, next(), -1, 1 << 20));
             } else if (a == "--media-boundaries") {
                 bopts.superpose_macrofacet = false;
+            } else if (a == "--cast-exits") {
+                bopts.media_find_exits = false;
             } else if (a == "--quiet" || a == "-q") {
                 quiet = true;
             } else if (a == "--check") {

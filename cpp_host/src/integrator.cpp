@@ -25,15 +25,31 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
     for (int i = 0; i < kMaxNullCrossings; ++i) {
         Ray r(o, d, 0.0f, dist);
         SurfaceHit h;
-        bool hit = scene_.intersect(r, &h);
+        // A medium that finds the exit itself is cast against the shapes near it only (see Li)
+        const bool to_exit = vol && medium && medium->finds_exits();
+        bool hit = to_exit ? scene_.intersect_near(medium->near_scene(), r, &h) : scene_.intersect(r, &h);
         float seg = hit ? h.t : dist;
         if (vol) {
-            if (medium) T *= medium->transmittance(r, seg, sampler);
+            bool exited = false;
+            if (to_exit) {
+                float t_end;
+                T *= medium->transmittance_to_exit(r, seg, sampler, &t_end);
+                exited = t_end < seg;
+                if (exited) seg = t_end;
+            } else if (medium) {
+                T *= medium->transmittance(r, seg, sampler);
+            }
             for (const SuperposedMedium& m : scene_.superposed_media()) {
                 if (T.is_black()) break;
                 T *= m.transmittance(r, seg, sampler);
             }
             if (T.is_black()) return T;
+            if (exited) {  // left the region before any hit: on from there, outside
+                o = o + d * seg;
+                if (std::isfinite(dist)) dist -= seg;
+                medium = medium->exterior();
+                continue;
+            }
         }
         if (!hit) return T;
         if (!h.shape->bsdf->is_null()) {
@@ -124,8 +140,11 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     };
 
     while (true) {
+        // Inside a medium that finds the ray's exit itself (Medium::finds_exits), the ray is cast
+        // against the shapes near its region only: not for the boundary's exit, then beyond.
+        const bool to_exit = vol && medium && medium->finds_exits();
         SurfaceHit hit;
-        bool found = scene_.intersect(ray, &hit);
+        bool found = to_exit ? scene_.intersect_near(medium->near_scene(), ray, &hit) : scene_.intersect(ray, &hit);
 
         // ---- media: free flights up to the surface (or infinity). The superposed media and the
         // current one are independent exponential flights: the nearest collision wins, so each is
@@ -136,6 +155,19 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             Rgb w(1.0f), pr(1.0f);
             float tmax = found ? hit.t : kInf;
             const Medium* scattering = nullptr;
+            bool exited = false;  // the ray left the region before the near shapes' hit
+            if (to_exit) {
+                // Its collision, or its exit, bounds the superposed media's flights
+                float t_end;
+                if (medium->sample_free_flight_to_exit(ray, tmax, sampler, &mi_m, &t_end)) {
+                    mi = mi_m;
+                    tmax = mi.t;
+                    scattering = medium;
+                } else if (t_end < tmax) {
+                    tmax = t_end;
+                    exited = true;
+                }
+            }
             // One medium's flight (a Medium or a SuperposedMedium) up to the nearest collision so
             // far; `from` goes to the medium whose event the ray leaves.
             auto fly = [&](const auto& flight, const Medium* owner) {
@@ -149,7 +181,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 pr *= pr_m;
             };
             for (const SuperposedMedium& m : scene_.superposed_media()) fly(m, m.medium());
-            if (medium) fly(*medium, medium);
+            if (medium && !to_exit) fly(*medium, medium);
             beta *= w;
             ratio *= pr;
             if (beta.is_black() || !beta.finite() || !(ratio.average() > 0)) break;
@@ -179,6 +211,11 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 from_medium_event = true;
                 ++depth;
                 if (!russian_roulette()) break;
+                continue;
+            }
+            if (exited) {  // on from the exit, outside
+                ray = Ray(ray.at(tmax), ray.d);
+                medium = medium->exterior();
                 continue;
             }
         }

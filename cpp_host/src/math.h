@@ -122,6 +122,18 @@ struct Aabb {
     bool valid() const { return lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z; }
     Vec3 center() const { return (lo + hi) * 0.5f; }
     Vec3 extent() const { return hi - lo; }
+    /// Narrows [*t0, *t1] to where o + t d lies in the box (slab test; a NaN from a zero
+    /// component of d on a slab's plane leaves it); false if that is empty.
+    bool clip(const Vec3& o, const Vec3& d, float* t0, float* t1) const {
+        for (int a = 0; a < 3; ++a) {
+            const float inv = 1.0f / d[a];
+            float ta = (lo[a] - o[a]) * inv, tb = (hi[a] - o[a]) * inv;
+            if (ta > tb) std::swap(ta, tb);
+            if (ta > *t0) *t0 = ta;
+            if (tb < *t1) *t1 = tb;
+        }
+        return !(*t0 > *t1);
+    }
     /// Squared distance from p to the box (0 inside).
     float dist_sq(const Vec3& p) const {
         Vec3 d = vmax(vmax(lo - p, p - hi), Vec3(0.0f));

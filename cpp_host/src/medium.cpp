@@ -79,6 +79,14 @@ bool HomogeneousMedium::sample_free_flight(const Ray& ray, float t_max, const Me
     return false;
 }
 
+bool Medium::sample_free_flight_to_exit(const Ray&, float, Sampler&, MediumInteraction*, float*) const {
+    throw Error(name() + " medium: does not find its region's exit");
+}
+
+Rgb Medium::transmittance_to_exit(const Ray&, float, Sampler&, float*) const {
+    throw Error(name() + " medium: does not find its region's exit");
+}
+
 Rgb HomogeneousMedium::transmittance(const Ray&, float t_max, Sampler&) const {
     if (!std::isfinite(t_max))
         return Rgb(sigma_t_.r > 0 ? 0.0f : 1.0f, sigma_t_.g > 0 ? 0.0f : 1.0f, sigma_t_.b > 0 ? 0.0f : 1.0f);

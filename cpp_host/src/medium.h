@@ -110,6 +110,26 @@ public:
     virtual Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const = 0;
     virtual const PhaseFunction& phase() const = 0;
     virtual std::string name() const = 0;
+
+    /// Whether the medium finds each ray's exit from its region itself (MacrofacetMedium::
+    /// find_exits): the integrator then casts rays inside it against the shapes near the region
+    /// only (Scene::intersect_near(near_scene())), without its boundary, and calls the *_to_exit
+    /// forms below.
+    bool finds_exits() const { return finds_exits_; }
+    /// The medium beyond the region's exit (null: vacuum), when finds_exits().
+    const Medium* exterior() const { return exterior_; }
+    unsigned near_scene() const { return near_scene_; }
+    /// sample_free_flight for a ray inside the region, up to t_max or the region's exit:
+    /// *t_end is where a flight that passed ended (the ray continues from there, outside).
+    virtual bool sample_free_flight_to_exit(const Ray& ray, float t_max, Sampler& sampler, MediumInteraction* mi,
+                                            float* t_end) const;
+    /// transmittance, up to t_max or the region's exit (*t_end).
+    virtual Rgb transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const;
+
+protected:
+    bool finds_exits_ = false;
+    const Medium* exterior_ = nullptr;
+    unsigned near_scene_ = 0;
 };
 
 class HomogeneousMedium final : public Medium {

@@ -102,8 +102,10 @@ private:
     std::string label_;
 };
 
-mf_track_query query(const Ray& ray, float t_max, Sampler& sampler) {
-    return mf_track_query{to_mf(ray.o), to_mf_unit(ray.d), std::isfinite(t_max) ? double(t_max) : INFINITY, sampler.next_u64()};
+/// `exit_level` 0: up to t_max only (mf_track_query).
+mf_track_query query(const Ray& ray, float t_max, double exit_level, Sampler& sampler) {
+    return mf_track_query{to_mf(ray.o), to_mf_unit(ray.d), std::isfinite(t_max) ? double(t_max) : INFINITY, sampler.next_u64(),
+                          exit_level};
 }
 
 }  // namespace
@@ -161,17 +163,36 @@ TrackCounts MacrofacetMedium::counts() const {
     return c;
 }
 
+void MacrofacetMedium::find_exits(double exit_level, const Medium* exterior, unsigned near_scene) {
+    if (!(exit_level >= top_ && std::isfinite(exit_level)))
+        throw Error(label_ + ": exit level " + std::to_string(exit_level) + " below the shell's top " + std::to_string(top_));
+    exit_level_ = exit_level;
+    exterior_ = exterior;
+    near_scene_ = near_scene;
+    finds_exits_ = true;
+}
+
 bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const MediumInteraction*, int, Sampler& sampler,
                                           MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const {
     *weight = Rgb(1.0f);  // grey medium: the albedo lives in the phase function
     *pdf_ratio = Rgb(1.0f);
-    mf_track_query q = query(ray, t_max, sampler);
+    float t_end;
+    return flight(query(ray, t_max, 0.0, sampler), ray, mi, &t_end);
+}
+
+bool MacrofacetMedium::sample_free_flight_to_exit(const Ray& ray, float t_max, Sampler& sampler, MediumInteraction* mi,
+                                                  float* t_end) const {
+    return flight(query(ray, t_max, exit_level_, sampler), ray, mi, t_end);
+}
+
+bool MacrofacetMedium::flight(const mf_track_query& q, const Ray& ray, MediumInteraction* mi, float* t_end) const {
     mf_collision c;
     const mf_field* field = field_ ? field_->handle() : nullptr;
     void* user_data = field_ ? field_->user_data() : nullptr;
     if (mf_track_free_flight(handle_, surface_->handle(), field, user_data, &q, &c) != MF_OK)
         throw Error(label_ + ": mf_track_free_flight failed: " + mf_last_error());
     count(c.stats);
+    *t_end = float(c.t);
     if (!c.scattered) return false;
     mi->t = float(c.t);
     mi->p = from_mf(c.p);
@@ -185,13 +206,22 @@ bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const Med
 }
 
 Rgb MacrofacetMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
-    mf_track_query q = query(ray, t_max, sampler);
+    float t_end;
+    return transmittance_of(query(ray, t_max, 0.0, sampler), &t_end);
+}
+
+Rgb MacrofacetMedium::transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const {
+    return transmittance_of(query(ray, t_max, exit_level_, sampler), t_end);
+}
+
+Rgb MacrofacetMedium::transmittance_of(const mf_track_query& q, float* t_end) const {
     mf_transmittance t;
     const mf_field* field = field_ ? field_->handle() : nullptr;
     void* user_data = field_ ? field_->user_data() : nullptr;
     if (mf_track_transmittance(handle_, surface_->handle(), field, user_data, &q, &t) != MF_OK)
         throw Error(label_ + ": mf_track_transmittance failed: " + mf_last_error());
     count(t.stats);
+    *t_end = float(t.t);
     return Rgb(float(t.transmittance));
 }
 

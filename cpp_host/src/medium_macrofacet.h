@@ -17,6 +17,7 @@
 #include "medium.h"
 
 struct mf_medium;
+struct mf_track_query;
 struct mf_track_stats;
 
 namespace mf {
@@ -42,6 +43,14 @@ public:
     bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
                             MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const override;
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const override;
+    bool sample_free_flight_to_exit(const Ray& ray, float t_max, Sampler& sampler, MediumInteraction* mi,
+                                    float* t_end) const override;
+    Rgb transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const override;
+    /// Let the tracking calls find each ray's exit from the region (mf_track_query::exit_level):
+    /// only where the region's boundary encloses points with f <= exit_level alone, and with
+    /// `near_scene` the shapes within exit_level of the boundary's box, none of them a medium
+    /// transition (SceneBuilder::let_media_find_exits). Beyond the exit lies `exterior`.
+    void find_exits(double exit_level, const Medium* exterior, unsigned near_scene);
     const PhaseFunction& phase() const override { return *phase_; }
     std::string name() const override { return "macrofacet"; }
 
@@ -58,6 +67,9 @@ public:
 
 private:
     void count(const ::mf_track_stats& s) const;
+    /// One free flight or transmittance call (*t_end: where it ended).
+    bool flight(const ::mf_track_query& q, const Ray& ray, MediumInteraction* mi, float* t_end) const;
+    Rgb transmittance_of(const ::mf_track_query& q, float* t_end) const;
 
     /// Tracking counts of the thread that holds this slot (tally_slot in the .cpp), on a cache
     /// line of their own: that thread adds with plain relaxed loads and stores, no locked
@@ -73,6 +85,7 @@ private:
     std::shared_ptr<const LibraryField> field_;
     std::shared_ptr<PhaseFunction> phase_;
     double top_ = 0;
+    double exit_level_ = 0;  // find_exits
     std::string label_;
     mutable std::array<Tally, kTallySlots + 1> tallies_;
     mutable std::atomic<uint64_t> violations_{0};  // exact and rare: always fetch_add

@@ -29,26 +29,56 @@ static void embree_error(void*, RTCError code, const char* str) {
     std::fprintf(stderr, "mfrender: embree error %d: %s\n", int(code), str ? str : "");
 }
 
+static RTCScene new_scene(RTCDevice device) {
+    RTCScene scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    return scene;
+}
+
 Scene::Scene() {
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw Error("could not create the Embree device");
     rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
-    scene_ = rtcNewScene(device_);
-    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+    all_.scene = new_scene(device_);
 }
 
 Scene::~Scene() {
-    if (scene_) rtcReleaseScene(scene_);
+    for (Traced& t : near_)
+        if (t.scene) rtcReleaseScene(t.scene);
+    if (all_.scene) rtcReleaseScene(all_.scene);
     if (device_) rtcReleaseDevice(device_);
 }
 
+void Scene::Traced::attach(RTCDevice device, const Shape& s) {
+    unsigned id = s.attach(device, scene);
+    if (by_geom_id.size() <= id) by_geom_id.resize(id + 1, nullptr);
+    by_geom_id[id] = &s;
+    bounds.expand(s.bounds());
+}
+
 void Scene::add_shape(std::shared_ptr<Shape> s) {
-    unsigned id = s->attach(device_, scene_);
-    if (by_geom_id_.size() <= id) by_geom_id_.resize(id + 1, nullptr);
-    by_geom_id_[id] = s.get();
+    all_.attach(device_, *s);
     bounds_.expand(s->bounds());
     shapes_.push_back(std::move(s));
+}
+
+unsigned Scene::add_near_scene(const std::vector<std::shared_ptr<Shape>>& shapes, const Aabb& region) {
+    Traced t;
+    t.region = region;
+    if (!shapes.empty()) {
+        t.scene = new_scene(device_);
+        for (const auto& s : shapes) t.attach(device_, *s);
+        // (padded: the box test must not drop a hit that the float slabs round off)
+        const Vec3 e = t.bounds.extent();
+        const Vec3 pad(1e-4f * std::max({e.x, e.y, e.z, std::abs(t.bounds.lo.x), std::abs(t.bounds.lo.y),
+                                         std::abs(t.bounds.lo.z), std::abs(t.bounds.hi.x), std::abs(t.bounds.hi.y),
+                                         std::abs(t.bounds.hi.z)}));
+        t.bounds.lo = t.bounds.lo - pad;
+        t.bounds.hi = t.bounds.hi + pad;
+    }
+    near_.push_back(std::move(t));
+    return unsigned(near_.size() - 1);
 }
 
 bool SuperposedMedium::clip(const Ray& ray, float t_max, Ray* inside, float* t0, float* length) const {
@@ -94,11 +124,27 @@ void Scene::add_emitter(std::shared_ptr<Emitter> e) {
 }
 
 void Scene::commit() {
-    rtcCommitScene(scene_);
+    rtcCommitScene(all_.scene);
+    for (Traced& t : near_)
+        if (t.scene) rtcCommitScene(t.scene);
     if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) throw Error("Embree failed to build the scene BVH");
 }
 
-bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
+bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const { return all_.intersect(ray, hit); }
+
+bool Scene::intersect_near(unsigned index, const Ray& ray, SurfaceHit* hit) const {
+    // (most rays in a shell miss the few shapes near it before they leave its box: box tests
+    // instead of a traversal)
+    const Traced& t = near_[index];
+    if (!t.scene) return false;
+    float t0 = ray.tmin, t1 = ray.tmax;
+    if (!t.region.clip(ray.o, ray.d, &t0, &t1)) return false;
+    float n0 = ray.tmin, n1 = t1;
+    if (!t.bounds.clip(ray.o, ray.d, &n0, &n1)) return false;
+    return t.intersect(Ray(ray.o, ray.d, ray.tmin, t1), hit);
+}
+
+bool Scene::Traced::intersect(const Ray& ray, SurfaceHit* hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
@@ -113,9 +159,9 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene_, &ctx, &rh);
+    rtcIntersect1(scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    const Shape* s = by_geom_id_[rh.hit.geomID];
+    const Shape* s = by_geom_id[rh.hit.geomID];
     if (s->region_boundary) {
         // A ray only passes through a region boundary (Shape::region_boundary): where, and on
         // which side (Embree's geometric normal, oriented as MeshShape::fill_hit's), without

@@ -87,6 +87,13 @@ public:
 
     /// Closest hit with t in (ray.tmin, ray.tmax).
     bool intersect(const Ray& ray, SurfaceHit* hit) const;
+    /// A scene of some of the shapes (already added): those in the box `region` that holds the
+    /// region of a medium that finds its rays' exits itself (Medium::finds_exits), its boundary
+    /// left out. Returns its index for intersect_near.
+    unsigned add_near_scene(const std::vector<std::shared_ptr<Shape>>& shapes, const Aabb& region);
+    /// intersect against near scene `index` only, and within its region's box (where the
+    /// medium's flights end, at the latest).
+    bool intersect_near(unsigned index, const Ray& ray, SurfaceHit* hit) const;
 
     const std::vector<std::shared_ptr<Shape>>& shapes() const { return shapes_; }
     const std::vector<std::shared_ptr<Emitter>>& emitters() const { return emitters_; }
@@ -106,10 +113,19 @@ public:
     std::vector<std::shared_ptr<const Medium>> media;  // keeps media alive
 
 private:
+    /// An Embree scene and its shapes by geometry id.
+    struct Traced {
+        RTCScene scene = nullptr;
+        std::vector<const Shape*> by_geom_id;
+        Aabb bounds;  // of the shapes
+        Aabb region;  // add_near_scene
+        void attach(RTCDevice device, const Shape& s);
+        bool intersect(const Ray& ray, SurfaceHit* hit) const;
+    };
     RTCDevice device_ = nullptr;
-    RTCScene scene_ = nullptr;
+    Traced all_;
+    std::vector<Traced> near_;  // add_near_scene (a null scene: no shape)
     std::vector<std::shared_ptr<Shape>> shapes_;
-    std::vector<const Shape*> by_geom_id_;
     std::vector<std::shared_ptr<Emitter>> emitters_;
     std::vector<const Emitter*> infinite_;
     std::vector<SuperposedMedium> superposed_;

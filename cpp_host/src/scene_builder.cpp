@@ -72,6 +72,7 @@ public:
         if (opts_.seed_override >= 0) scene_->seed = uint64_t(opts_.seed_override);
         if (opts_.max_depth_override >= -1) scene_->integrator.max_depth = opts_.max_depth_override;
         place_macrofacet_boundaries();
+        if (opts_.media_find_exits) let_media_find_exits();
         for (auto& kv : media_) scene_->media.push_back(kv.second);
         scene_->content_hash = parsed.content_hash;
         scene_->commit();
@@ -923,6 +924,44 @@ private:
                 scene_->add_shape(b.shape);
         }
         macrofacet_boundaries_.clear();
+    }
+
+    /// A macrofacet medium whose region boundary the library built (its exit level known)
+    /// finds each ray's exit itself (mf_track_query::exit_level) when no medium transition lies
+    /// in the boundary's box grown by that level: a ray inside is then cast against the shapes
+    /// in that box only (Scene::add_near_scene), without the boundary, instead of against the
+    /// scene for the boundary's exit and again beyond it. The tracker may follow a ray anywhere
+    /// in that box until it finds it outside the region; the shapes there bound its flights.
+    void let_media_find_exits() {
+        const std::vector<std::shared_ptr<Shape>> shapes = scene_->shapes();
+        for (const auto& s : shapes) {
+            auto medium = std::dynamic_pointer_cast<const MacrofacetMedium>(s->interior);
+            if (!s->region_boundary || !(s->exit_level > 0) || !medium) continue;
+            // (a flipped sphere's region is unbounded: every ray would be tracked to infinity)
+            mf_vec3 lo, hi;
+            if (mf_surface_bounding_box(medium->surface().handle(), &lo, &hi) != MF_OK ||
+                !std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z))
+                continue;
+            Aabb box = s->bounds();
+            const float grow = float(s->exit_level) + 1e-4f * std::max({box.extent().x, box.extent().y, box.extent().z});
+            box.lo = box.lo - Vec3(grow);
+            box.hi = box.hi + Vec3(grow);
+            std::vector<std::shared_ptr<Shape>> near;
+            bool eligible = true;
+            for (const auto& other : shapes) {
+                if (other == s) continue;
+                const Aabb b = other->bounds();
+                if (b.hi.x < box.lo.x || b.lo.x > box.hi.x || b.hi.y < box.lo.y || b.lo.y > box.hi.y || b.hi.z < box.lo.z ||
+                    b.lo.z > box.hi.z)
+                    continue;
+                // (a medium transition would hand the ray to another medium inside this one's region)
+                eligible = eligible && !other->region_boundary && !other->is_medium_transition();
+                near.push_back(other);
+            }
+            // (built here, before rendering: the only writer)
+            if (eligible)
+                const_cast<MacrofacetMedium&>(*medium).find_exits(s->exit_level, s->exterior.get(), scene_->add_near_scene(near, box));
+        }
     }
 
     /// Refuses a boundary that does not contain the medium's region: every vertex of a mesh (2048

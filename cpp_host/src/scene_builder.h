@@ -31,6 +31,10 @@ struct BuildOptions {
     /// (SceneBuilder::place_macrofacet_boundaries); false (mfrender --media-boundaries) keeps
     /// the boundaries, for comparison: both render the same image.
     bool superpose_macrofacet = true;
+    /// Let a macrofacet medium whose boundary the library built, with no other geometry near it,
+    /// find each ray's exit from its region itself (SceneBuilder::let_media_find_exits); false
+    /// (mfrender --cast-exits) casts a ray for every exit, for comparison: the same image.
+    bool media_find_exits = true;
 };
 
 struct BuildReport {

@@ -95,6 +95,9 @@ public:
     /// emitter, nothing textured. A ray only passes through it, so its hits carry t, p and ng
     /// alone (Scene::intersect).
     bool region_boundary = false;
+    /// Of a region boundary: a level of the mean surface's f that no point it encloses exceeds,
+    /// nor any within float rounding of it (mf_enclosure_exit_level; 0: unknown).
+    double exit_level = 0;
 };
 
 class MeshShape final : public Shape {

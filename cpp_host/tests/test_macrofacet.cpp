@@ -25,6 +25,8 @@
 //    noise, modelled as var = k·(a + b) with k fitted over the mask).
 //  * unbiased_convergence: the same macrofacet and homogeneous scenes at 32 spp / seed 1 and
 //    128 spp / seed 2 agree (mean difference within 4.5 combined SE).
+//  * media_find_their_exits: a mesh shell whose tracker finds the rays' exits renders as with a
+//    ray cast for every exit (--cast-exits).
 //  * boundary_form: the form Mitsuba with the plugin reads (nested mean surface, null-BSDF
 //    boundary) renders as the mean-surface form, with a tight and a loose boundary.
 //  * determinism: bit-identical EXR for the same seed (1 and 2 threads).
@@ -496,6 +498,22 @@ TEST_CASE(unbiased_convergence) {
 // So does the mean-surface form with --media-boundaries: its boundary traced in the BVH, where
 // by default the medium in vacuum is tracked along every ray over the boundary's chord
 // (SuperposedMedium).
+/// The mean of `ref` and the mean pixel difference b - ref with its standard error.
+static void mean_difference(const Image& ref, const Image& b, double* mean, double* m, double* se) {
+    const double n = double(ref.rgb.size());
+    double v = 0;
+    *m = *mean = 0;
+    for (size_t i = 0; i < ref.rgb.size(); ++i) {
+        *m += (double(b.rgb[i]) - ref.rgb[i]) / n;
+        *mean += ref.rgb[i] / n;
+    }
+    for (size_t i = 0; i < ref.rgb.size(); ++i) {
+        const double d = double(b.rgb[i]) - ref.rgb[i] - *m;
+        v += d * d / (n - 1);
+    }
+    *se = std::sqrt(v / n);
+}
+
 TEST_CASE(boundary_form) {
     const std::string params = R"(<float name="sigma" value="0.04"/><string name="distribution" value="gpss"/>)"
                                R"(<float name="alpha" value="0.5"/><float name="alpha_z" value="0.25"/><string name="material" value="Cu"/>)";
@@ -519,21 +537,50 @@ TEST_CASE(boundary_form) {
                                                   R"("/><bsdf type="null"/><ref name="interior" id="mf"/></shape>)"));
             CHECK(run({work(name + ".xml"), "-o", work(name + ".exr"), "--quiet", "--seed", "2"}) == 0);
         }
-        const Image b = read_exr(work(name + ".exr"));
-        double n = double(ref.rgb.size()), m = 0, v = 0, mean = 0;
-        for (size_t i = 0; i < ref.rgb.size(); ++i) {
-            m += (double(b.rgb[i]) - ref.rgb[i]) / n;
-            mean += ref.rgb[i] / n;
-        }
-        for (size_t i = 0; i < ref.rgb.size(); ++i) {
-            double d = double(b.rgb[i]) - ref.rgb[i] - m;
-            v += d * d / (n - 1);
-        }
-        const double se = std::sqrt(v / n);
+        double mean, m, se;
+        mean_difference(ref, read_exr(work(name + ".exr")), &mean, &m, &se);
         CHECK_MSG(std::fabs(m) < 4.5 * se + 1e-4, name + ": boundary form - mean-surface form = " + std::to_string(m) + " (se " +
                                                       std::to_string(se) + ")");
         std::printf("  boundary %s: mean %.5f, boundary form - mean-surface form = %+.5f (%.2f se)\n", radius, mean, m, m / se);
     }
+}
+
+// A torus mesh shell cut by a floor (the shapes near its region): the tracker finds each ray's
+// exit from the enclosure (SceneBuilder::let_media_find_exits) and renders what casting a ray for
+// every exit renders (--cast-exits).
+TEST_CASE(media_find_their_exits) {
+    std::ostringstream obj;
+    const int U = 32, V = 12;
+    for (int i = 0; i < U; ++i)
+        for (int j = 0; j < V; ++j) {
+            const double u = 2 * 3.14159265358979 * i / U, v = 2 * 3.14159265358979 * j / V, r = 0.6 + 0.25 * std::cos(v);
+            obj << "v " << r * std::cos(u) << " " << r * std::sin(u) << " " << 0.25 * std::sin(v) << "\n";
+        }
+    auto at = [&](int i, int j) { return 1 + (i % U) * V + (j % V); };
+    for (int i = 0; i < U; ++i)
+        for (int j = 0; j < V; ++j) obj << "f " << at(i, j) << " " << at(i + 1, j) << " " << at(i + 1, j + 1) << " " << at(i, j + 1) << "\n";
+    write_file(work("exits_torus.obj"), obj.str());
+    const std::string xml = "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(3.0f, 40.0f, 24, 24, 64) +
+                            medium_xml("mf", R"(<float name="sigma" value="0.01"/><string name="distribution" value="ggx"/><float name="alpha" value="0.3"/><string name="material" value="Au"/>)") +
+                            R"(<shape type="obj"><string name="filename" value=")" + work("exits_torus.obj") + R"("/><ref name="interior" id="mf"/></shape>
+        <shape type="rectangle"><transform name="to_world"><scale value="2"/><translate z="-0.15"/></transform>
+          <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+        <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><lookat origin="0, 1.5, 2" target="0, 0, 0" up="0, 0, 1"/></transform>
+          <emitter type="area"><rgb name="radiance" value="5"/></emitter></shape><emitter type="constant"><rgb name="radiance" value="0.3"/></emitter></scene>)";
+    write_file(work("exits.xml"), xml);
+    for (bool finds : {true, false}) {
+        BuildOptions o;
+        o.media_find_exits = finds;
+        auto scene = build_scene(parse_scene_string(xml, work("exits.xml"), {}), o, nullptr);
+        const MacrofacetMedium* m = first_macrofacet(*scene);
+        CHECK(m && m->finds_exits() == finds);
+    }
+    CHECK(run({work("exits.xml"), "-o", work("exits_cast.exr"), "--quiet", "--seed", "1", "--cast-exits"}) == 0);
+    CHECK(run({work("exits.xml"), "-o", work("exits_found.exr"), "--quiet", "--seed", "2"}) == 0);
+    double mean, m, se;
+    mean_difference(read_exr(work("exits_cast.exr")), read_exr(work("exits_found.exr")), &mean, &m, &se);
+    CHECK_MSG(std::fabs(m) < 4.5 * se + 1e-4, "exits found - exits cast = " + std::to_string(m) + " (se " + std::to_string(se) + ")");
+    std::printf("  exits: mean %.5f, found - cast = %+.5f (%.2f se)\n", mean, m, m / se);
 }
 
 TEST_CASE(determinism) {

@@ -111,6 +111,16 @@ pub fn transmittance(t: f64) {
     assert!((0.0..=1.0).contains(&t), "transmittance {t}");
 }
 
+/// Where a call that passed (or a transmittance) ended: at `t_max`, or with an exit level
+/// anywhere on `[0, t_max]`.
+pub fn ended(t: f64, q: &mf_track_query) {
+    if q.exit_level == 0.0 {
+        assert!(t.to_bits() == q.t_max.to_bits(), "ended at t = {t} != t_max = {}", q.t_max);
+    } else {
+        assert!(t >= 0.0 && t <= q.t_max, "ended at t = {t} outside [0, {}] (exit level {})", q.t_max, q.exit_level);
+    }
+}
+
 /// A sampled free flight on `[0, t_max]`: scattered at a finite `0 <= t <= t_max`, or passed
 /// with `t = t_max`.
 pub fn free_flight(flight: &mf_free_flight, t_max: f64) {
@@ -193,7 +203,7 @@ pub fn collision(c: &mf_collision, q: &mf_track_query) {
             .iter()
             .all(|x| *x == 0.0);
         assert!(zero && c.local.set == 0, "a pass must have zero point, f, frame and local: {c:?}");
-        assert!(c.t.to_bits() == q.t_max.to_bits(), "passed with t = {} != t_max = {}", c.t, q.t_max);
+        ended(c.t, q);
         return;
     }
     assert!(c.t >= 0.0 && c.t <= q.t_max && c.t.is_finite(), "collision at t = {} on [0, {}]", c.t, q.t_max);

@@ -87,11 +87,23 @@ impl Scene<'_> {
             _ => c + b.sphere() * size * b.log_uniform(-2.0, 1.0),
         };
         let normal = if origin.is_finite() { self.eval(origin).map_or(DVec3::Z, |p| dvec3(p.normal)) } else { DVec3::Z };
-        let q = mf_track_query { origin: vec3(origin), d: vec3(b.direction(normal)), t_max: b.length(size), seed: b.u64() };
+        let (d, t_max, seed) = (vec3(b.direction(normal)), b.length(size), b.u64());
+        // Every fourth query finds its exit above an exit level from the shell's top to 2.75
+        // times it, drawn from the seed's bits (the committed inputs' bytes keep their meaning).
+        let exit_level = if seed % 4 == 0 { self.shell_top() * (1.0 + (seed >> 2 & 7) as f64 / 4.0) } else { 0.0 };
+        let q = mf_track_query { origin: vec3(origin), d, t_max, seed, exit_level };
         if debug() {
             eprintln!("query: {q:?}");
         }
         q
+    }
+
+    /// `mf_medium_shell_top` (0 where it fails: the query then finds no exit).
+    fn shell_top(&self) -> f64 {
+        let mut top = 0.0;
+        // SAFETY: a live medium and a valid out-pointer.
+        let _ = unsafe { mf_medium_shell_top(self.medium.0 as *const mf_medium, &mut top) };
+        top
     }
 
     /// One free flight with its property; `honest`: no majorant violation.
@@ -114,6 +126,7 @@ impl Scene<'_> {
             eprintln!("transmittance: {t:?}");
         }
         check::transmittance(t.transmittance);
+        check::ended(t.t, q);
         self.honest_stats(&t.stats);
         Some(t)
     }

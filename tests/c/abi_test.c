@@ -1239,7 +1239,7 @@ static void test_surfaces_and_tracking(void) {
   /* Free flights and transmittance: same seed, same answer (built-in vs host sphere too). */
   double top = 0;
   EXPECT_OK(mf_medium_shell_top(m, &top));
-  const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99};
+  const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99, 0};
   mf_collision c1, c2;
   EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &c1));
   hs.calls = 0;
@@ -1262,13 +1262,13 @@ static void test_surfaces_and_tracking(void) {
   CHECK(vp.pdf == pdf && same_bits(&vp.value, &value, sizeof value), "mf_phase_eval_pdf must equal eval and pdf");
 
   mf_transmittance t1, t2;
-  const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5};
+  const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5, 0};
   EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t1));
   EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t2));
   CHECK(t1.transmittance == t2.transmittance && t1.transmittance >= 0 && t1.transmittance <= 1,
         "transmittance %g / %g", t1.transmittance, t2.transmittance);
   /* Passing: t_max short of the shell. */
-  const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5};
+  const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5, 0};
   EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &shortq, &c1));
   CHECK(!c1.scattered && c1.t == 0.5, "a ray that ends above the shell passes (t = %g)", c1.t);
 
@@ -1323,6 +1323,13 @@ static void test_surfaces_and_tracking(void) {
   bad = q;
   bad.t_max = -1;
   TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "t_max");
+  /* An exit level must be 0 (none) or finite and at least the shell's top. */
+  const double bad_levels[] = {NAN, -1, INFINITY, 0.5 * top};
+  for (int i = 0; i < 4; ++i) {
+    bad = q;
+    bad.exit_level = bad_levels[i];
+    TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, &bad, &c1), MF_ERROR_INVALID_ARGUMENT, "exit_level");
+  }
   TRACK_CASE(mf_track_free_flight(NULL, sphere, NULL, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "medium");
   TRACK_CASE(mf_track_free_flight(m, NULL, NULL, NULL, &q, &c1), MF_ERROR_NULL_POINTER, "surface");
   TRACK_CASE(mf_track_free_flight(m, sphere, NULL, NULL, NULL, &c1), MF_ERROR_NULL_POINTER, "query");
@@ -1431,7 +1438,7 @@ static void test_surfaces_and_tracking(void) {
     EXPECT_OK(mf_surface_eval(grid, NULL, v3(0.65, 0, 0), &gp));
     CHECK_ABS(gp.f, 0.05, 8e-3); /* trilinear error h²/8 × 2/|x| with h = 2/15 */
     CHECK(gp.normal.x > 0.99, "grid normal (%g, %g, %g)", gp.normal.x, gp.normal.y, gp.normal.z);
-    const mf_track_query gq = {v3(-3, 0.01, 0.02), v3(1, 0, 0), INFINITY, 3};
+    const mf_track_query gq = {v3(-3, 0.01, 0.02), v3(1, 0, 0), INFINITY, 3, 0};
     EXPECT_OK(mf_track_free_flight(m, grid, NULL, NULL, &gq, &c1));
     CHECK(c1.scattered && c1.stats.majorant_violations == 0, "a ray into the grid sphere scatters");
     mf_surface *g2 = (mf_surface *)0x1;
@@ -1465,6 +1472,29 @@ static void test_surfaces_and_tracking(void) {
   EXPECT_STATUS(mf_enclosure_mesh(NULL, &em_keep), MF_ERROR_NULL_POINTER, "enclosure");
   EXPECT_STATUS(mf_enclosure_mesh(e, NULL), MF_ERROR_NULL_POINTER, "out_mesh");
   CHECK(same_bits(&em_keep, &em, sizeof em), "mf_enclosure_mesh wrote its out-parameter on failure");
+  /* Its exit level: no vertex lies above it. A ray from inside the shell with it ends outside
+     the enclosure: at a collision, or where it found the ray outside (f above the level). */
+  double exit_level = 0;
+  EXPECT_OK(mf_enclosure_exit_level(e, &exit_level));
+  CHECK(exit_level >= top && exit_level < 4 * top, "exit level %g for a shell top of %g", exit_level, top);
+  for (size_t i = 0; i < em.vertex_count; ++i) {
+    mf_surface_point at;
+    EXPECT_OK(mf_surface_eval(mesh, NULL, v3(em.positions[3 * i], em.positions[3 * i + 1], em.positions[3 * i + 2]), &at));
+    CHECK(at.f <= exit_level, "enclosure vertex %zu has f = %g above the exit level %g", i, at.f, exit_level);
+  }
+  const mf_track_query outward = {v3(2, 0, 0), v3(1, 0, 0), INFINITY, 7, exit_level};
+  mf_collision out_c;
+  mf_transmittance out_t;
+  EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &outward, &out_c));
+  EXPECT_OK(mf_track_transmittance(m, mesh, NULL, NULL, &outward, &out_t));
+  CHECK(out_c.scattered || (isfinite(out_c.t) && out_c.t <= max_x - 2 + exit_level),
+        "a flight to the exit ends by the enclosure (t = %g)", out_c.t);
+  CHECK(out_t.transmittance == 0 || (isfinite(out_t.t) && out_t.t <= max_x - 2 + exit_level),
+        "a transmittance to the exit ends by the enclosure (t = %g)", out_t.t);
+  double level_keep = -7;
+  EXPECT_STATUS(mf_enclosure_exit_level(NULL, &level_keep), MF_ERROR_NULL_POINTER, "enclosure");
+  EXPECT_STATUS(mf_enclosure_exit_level(e, NULL), MF_ERROR_NULL_POINTER, "out_level");
+  CHECK(level_keep == -7, "mf_enclosure_exit_level wrote its out-parameter on failure");
   mf_enclosure_free(e);
   mf_enclosure_free(NULL);
   EXPECT_STATUS(mf_surface_enclosure(sphere, NULL, NAN, 0.0, &e), MF_ERROR_INVALID_ARGUMENT, "level");
@@ -1534,7 +1564,7 @@ static void test_fields(void) {
   EXPECT_OK(mf_field_new_callbacks(&own_cb, &own));
   host_field same = {1, 0};
   for (uint64_t seed = 0; seed < 20; ++seed) {
-    const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, seed};
+    const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, seed, 0};
     mf_collision plain, through;
     EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &plain));
     EXPECT_OK(mf_track_free_flight(m, sphere, own, &same, &q, &through));
@@ -1549,7 +1579,7 @@ static void test_fields(void) {
   host_field stepped = {0, 0};
   int far_side = 0;
   for (uint64_t seed = 0; seed < 40; ++seed) {
-    const mf_track_query q = {v3(3, 0.2, 0.1), v3(-1, 0, 0), INFINITY, seed};
+    const mf_track_query q = {v3(3, 0.2, 0.1), v3(-1, 0, 0), INFINITY, seed, 0};
     mf_collision c;
     EXPECT_OK(mf_track_free_flight(m, sphere, field, &stepped, &q, &c));
     CHECK(c.stats.majorant_violations == 0, "violations with honest bounds");
@@ -1611,7 +1641,7 @@ static void test_fields(void) {
   bad.anisotropy[0] = 1, bad.anisotropy[1] = -1, bad.anisotropy[2] = 1;
   EXPECT_STATUS(mf_phase_eval_pdf_local(m, &bad, &fr, wi, wo, &half), MF_ERROR_INVALID_ARGUMENT, "positive definite");
   CHECK(same_bits(&half, &local, sizeof half), "a failed _local call wrote its out-parameter");
-  const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, 1};
+  const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, 1, 0};
   mf_collision c;
   host_field failing = {2, 0}, negative = {3, 0}, unknown = {4, 0};
   EXPECT_STATUS(mf_track_free_flight(m, sphere, field, &failing, &q, &c), MF_ERROR_CALLBACK, "returned 7");

@@ -438,10 +438,12 @@ impl SurfaceVisitor for BuildEnclosure {
 /// or 1/8 of a larger `level`; at most 512 cells along an axis, at least 1e5 ulps of the largest
 /// coordinate and 1e-53), within one cell diagonal of the level set (L of them for an SDF grid
 /// whose interpolation is L-Lipschitz).
-/// Needs a surface with a finite bounding box.
+/// Needs a surface with a finite bounding box. Its exit level ([`mf_enclosure_exit_level`]) lets
+/// tracking calls find the ray's exit themselves (`mf_track_query::exit_level`).
 pub struct mf_enclosure {
     positions: Vec<f64>,
     indices: Vec<u32>,
+    exit_level: f64,
 }
 
 /// Builds the enclosure of `f < level` (see [`mf_enclosure`]); `user_data` goes to the callbacks
@@ -464,7 +466,7 @@ pub unsafe extern "C" fn mf_surface_enclosure(
         let e = with_surface(s, user_data, BuildEnclosure { level, cell: cell_size })?;
         let positions = e.positions.iter().flat_map(|p| p.to_array()).collect();
         let indices = e.triangles.iter().flatten().copied().collect();
-        *slot = into_handle(mf_enclosure { positions, indices });
+        *slot = into_handle(mf_enclosure { positions, indices, exit_level: e.exit_level });
         Ok(())
     })
 }
@@ -487,6 +489,24 @@ pub unsafe extern "C" fn mf_enclosure_mesh(enclosure: *const mf_enclosure, out_m
             normals: std::ptr::null(),
             uvs: std::ptr::null(),
         };
+        Ok(())
+    })
+}
+
+/// A level of `f` above which a point lies outside the enclosure: no point it encloses exceeds
+/// it, nor any point within `float` rounding of it (the vertices as a host copies them, a ray's
+/// origin). Give it as [`mf_track_query`]`::exit_level` to let the tracking calls end at the
+/// ray's exit from the enclosure.
+///
+/// # Safety
+/// Pointers must be NULL or valid.
+///
+/// [`mf_track_query`]: crate::track::mf_track_query
+#[no_mangle]
+pub unsafe extern "C" fn mf_enclosure_exit_level(enclosure: *const mf_enclosure, out_level: *mut f64) -> mf_status {
+    boundary(|| {
+        let e = arg(enclosure, "enclosure")?;
+        *out(out_level, "out_level")? = e.exit_level;
         Ok(())
     })
 }

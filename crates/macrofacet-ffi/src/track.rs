@@ -24,6 +24,19 @@ use std::ffi::c_void;
 
 /// One tracking query: the ray `origin + t d` (`d` unit, world space), `t ∈ [0, t_max]`
 /// (`t_max` may be `+inf`), inside the medium's region; `seed` drives the call's random numbers.
+///
+/// `exit_level` 0 (as zero-initialised): the host has cast the ray to its region boundary's
+/// exit and passes that as `t_max`. Otherwise the boundary's exit level
+/// ([`mf_enclosure_exit_level`], or for a host's own boundary a level of `f` that no point it
+/// encloses exceeds; at least `mf_medium_shell_top`): the call then also ends where it finds the
+/// ray outside the boundary, and a ray that passed reports where (`mf_collision::t`,
+/// `mf_transmittance::t`), so the host continues it from there, outside, without a ray cast
+/// for the exit. Only valid where no other geometry lies within `exit_level` of the surface's
+/// bounding box (`mf_surface_bounding_box`): the call tracks the medium wherever the ray goes
+/// until it finds it outside. Same results as the ray cast: the shell's density is zero between
+/// its top and the boundary.
+///
+/// [`mf_enclosure_exit_level`]: crate::surface::mf_enclosure_exit_level
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct mf_track_query {
@@ -31,6 +44,7 @@ pub struct mf_track_query {
     pub d: mf_vec3,
     pub t_max: f64,
     pub seed: u64,
+    pub exit_level: f64,
 }
 
 /// What one tracking call cost: surface queries (callbacks), tracked segments (bound queries),
@@ -49,7 +63,7 @@ pub struct mf_track_stats {
 /// The outcome of [`mf_track_free_flight`]. When `scattered`, a real collision happened at
 /// `t` (`0 <= t <= t_max`), at `p` where the signed distance is `f` and the local frame of the
 /// phase function is `frame`; otherwise the ray passed the segment (the other fields are zero and
-/// `t = t_max`). The weight of either outcome is 1: the flakes' albedo is in the phase function.
+/// `t = t_max`, or with an exit level where the ray left the region). The weight of either outcome is 1: the flakes' albedo is in the phase function.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct mf_collision {
@@ -63,11 +77,14 @@ pub struct mf_collision {
     pub stats: mf_track_stats,
 }
 
-/// The outcome of [`mf_track_transmittance`]: an unbiased estimate in `[0, 1]`.
+/// The outcome of [`mf_track_transmittance`]: an unbiased estimate in `[0, 1]` over `[0, t]`:
+/// `t = t_max`, or with an exit level where the ray left the region (where the estimate
+/// reached 0, where it did).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct mf_transmittance {
     pub transmittance: f64,
+    pub t: f64,
     pub stats: mf_track_stats,
 }
 
@@ -77,8 +94,9 @@ impl From<TrackStats> for mf_track_stats {
     }
 }
 
-/// A validated query: origin, unit direction, length.
-fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64)> {
+/// A validated query: origin, unit direction, length, exit level (`+inf` for none; the
+/// tracker checks it against the shell's top).
+fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64, f64)> {
     let origin = DVec3::from(q.origin);
     if !origin.is_finite() {
         return Err(Error::new(ErrorKind::InvalidArgument, format!("origin must be finite, got {origin}")).into());
@@ -87,7 +105,12 @@ fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64)> {
     if !(q.t_max >= 0.0) {
         return Err(Error::new(ErrorKind::InvalidArgument, format!("t_max must be >= 0 (or +inf), got {}", q.t_max)).into());
     }
-    Ok((origin, d, q.t_max))
+    let exit_level = match q.exit_level {
+        0.0 => f64::INFINITY,
+        level if level.is_finite() && level > 0.0 => level,
+        level => return Err(Error::new(ErrorKind::InvalidArgument, format!("exit_level must be 0 (none) or finite and at least the shell's top, got {level}")).into()),
+    };
+    Ok((origin, d, q.t_max, exit_level))
 }
 
 /// One call: a free flight or a transmittance, with the field (if any) and the host's data. The
@@ -100,7 +123,7 @@ struct Call<'a> {
     bounds: &'a ProjectedAreaBounds,
     field: Option<&'a mf_field>,
     user_data: *mut c_void,
-    ray: (DVec3, DVec3, f64),
+    ray: (DVec3, DVec3, f64, f64),
     seed: u64,
 }
 
@@ -134,13 +157,14 @@ fn passed(t: f64, stats: mf_track_stats) -> mf_collision {
     mf_collision { scattered: false, t, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, local: mf_local_params::NONE, stats }
 }
 
-fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64), seed: u64, tracker: &Tracker<S, F>) -> macrofacet::error::Result<()> {
+fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64, f64), seed: u64, tracker: &Tracker<S, F>) -> macrofacet::error::Result<()> {
     let mut stats = TrackStats::default();
-    let (origin, d, t_max) = ray;
+    let (origin, d, t_max, exit_level) = ray;
     let rng = &mut Pcg32::new(seed, TRACK_STREAM);
+    let exits = exit_level.is_finite();
     match out {
         Out::FreeFlight(slot) => {
-            let flight = tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?;
+            let (flight, t_end) = if exits { tracker.sample_free_flight_to_exit(origin, d, t_max, exit_level, rng, &mut stats)? } else { (tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?, t_max) };
             *slot = match flight {
                 TrackedFlight::Scatter { t, point, local } => mf_collision {
                     scattered: true,
@@ -151,12 +175,12 @@ fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64), s
                     local: (&local).into(),
                     stats: stats.into(),
                 },
-                TrackedFlight::Pass => passed(t_max, stats.into()),
+                TrackedFlight::Pass => passed(t_end, stats.into()),
             };
         }
         Out::Transmittance(slot) => {
-            let transmittance = tracker.transmittance(origin, d, t_max, rng, &mut stats)?;
-            *slot = mf_transmittance { transmittance, stats: stats.into() };
+            let (transmittance, t) = if exits { tracker.transmittance_to_exit(origin, d, t_max, exit_level, rng, &mut stats)? } else { (tracker.transmittance(origin, d, t_max, rng, &mut stats)?, t_max) };
+            *slot = mf_transmittance { transmittance, t, stats: stats.into() };
         }
     }
     Ok(())
@@ -296,6 +320,6 @@ pub unsafe extern "C" fn mf_track_transmittance_batch(
     count: usize,
     out_transmittances: *mut mf_transmittance,
 ) -> mf_status {
-    let blank = mf_transmittance { transmittance: 0.0, stats: TrackStats::default().into() };
+    let blank = mf_transmittance { transmittance: 0.0, t: 0.0, stats: TrackStats::default().into() };
     track_batch(medium, surface, field, user_data, queries, count, out_transmittances, blank, transmittance)
 }

@@ -491,7 +491,7 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
             let origin = rng.direction() * (0.6 + 0.8 * rng.next());
             let d = rng.direction().normalize();
             let t_max = if i % 3 == 0 { f64::INFINITY } else { 2.0 * rng.next() };
-            queries.push(mf_track_query { origin: v(origin), d: v(d), t_max, seed: i * 7919 + 1 });
+            queries.push(mf_track_query { origin: v(origin), d: v(d), t_max, seed: i * 7919 + 1, exit_level: 0.0 });
         }
         let stats = |s: &TrackStats| mf_track_stats { surface_queries: s.surface_queries, segments: s.segments, tentative_collisions: s.tentative_collisions, majorant_violations: s.majorant_violations };
         let mut flights = vec![unsafe { std::mem::zeroed::<mf_collision>() }; queries.len()];

@@ -522,8 +522,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// shell's top), clipped to `[0, t_max]`. No representable ray point lies beyond
     /// `t = f64::MAX`: the interval ends there (found by fuzzing: a segment across the shell of
     /// a sphere of radius `f64::MAX` ended past it, and a collision came back at `t = +inf`).
-    fn clip(&self, origin: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
-        let region = self.surface.bounding_box().grown(self.height().top() * (1.0 + 1e-9));
+    /// With an exit level (`exit_level` finite, [`Self::sample_free_flight_to_exit`]) the box is
+    /// grown by it instead: it then holds the host's whole region, not only the shell.
+    fn clip(&self, origin: DVec3, d: DVec3, t_max: f64, exit_level: f64) -> Option<(f64, f64)> {
+        let reach = if exit_level.is_finite() { exit_level } else { self.height().top() };
+        let region = self.surface.bounding_box().grown(reach * (1.0 + 1e-9));
         region.clip(origin, d, 0.0, t_max.min(f64::MAX))
     }
 
@@ -550,9 +553,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// Returns the new distance, position and surface point.
     /// Between exact queries the surface's cheap lower bound of `|f|` keeps the steps going: the
     /// ray stays above the top face (`f >= top > 0` after a step of `f − top`), so there `f` is at
-    /// least that bound.
+    /// least that bound. Stops at the first exact query above `exit_level` (the ray has left the
+    /// host's region there: [`Self::sample_free_flight_to_exit`]).
     #[allow(clippy::too_many_arguments)]
-    fn skip_above(&self, mut t: f64, mut p: DVec3, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, DVec3, SurfacePoint)> {
+    fn skip_above(&self, mut t: f64, mut p: DVec3, mut start: SurfacePoint, origin: DVec3, d: DVec3, t_exit: f64, exit_level: f64, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, DVec3, SurfacePoint)> {
         let (sigma, top) = (self.height().sigma, self.height().top());
         // A surface whose clearance is the crossing itself crosses any gap in one step.
         let exact_clearance = self.surface.exact_clearance();
@@ -560,7 +564,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut f = start.f;
         let mut exact = true;
         for _ in 0..MAX_SKIPS {
-            if !(t < t_exit) {
+            if !(t < t_exit) || (exact && f > exit_level) {
                 break;
             }
             // Between the top face and the threshold, only a step the surface knows exactly.
@@ -776,6 +780,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     /// The next tentative collision of the majorant after `s` on the segment, or `None` at its
     /// end: inverts `S_up ∫ρ(f_lo)` at an exponential variate.
+    #[inline]
     fn next_tentative(&self, seg: &Segment, s: f64, rng: &mut Pcg32) -> Option<f64> {
         if seg.s_up == 0.0 {
             return None;
@@ -816,8 +821,52 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     /// Samples a free flight along `origin + t d`, `t ∈ [0, t_max]` (`t_max` may be `+∞`), by
     /// delta tracking against the segment majorants.
+    #[inline]
     pub fn sample_free_flight(&self, origin: DVec3, d: DVec3, t_max: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<TrackedFlight> {
-        let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(TrackedFlight::Pass) };
+        Ok(self.free_flight::<false>(origin, d, t_max, f64::INFINITY, rng, stats)?.0)
+    }
+
+    /// [`Self::sample_free_flight`] for a ray inside a host's region boundary that encloses only
+    /// points where `f <= exit_level` (the library's enclosures give it:
+    /// [`Enclosure::exit_level`]), when no other geometry lies in the box that holds the region
+    /// (the surface's bounding box grown by `exit_level`): the flight also ends where the ray is
+    /// found outside the region (an exact query above `exit_level`, or past that box), so the
+    /// host needs no ray cast for the boundary's exit. Returns the flight and, when it
+    /// passed, where it ended (`t_max`, or the exit: the host continues the ray from there,
+    /// outside the region). Flights and transmittances are those of the same ray cut at the
+    /// boundary's exit: beyond it the shell's density is zero up to the exit point, and the
+    /// host's next ray cast finds any re-entry. `exit_level` must be finite and at least the
+    /// shell's top.
+    ///
+    /// [`Enclosure::exit_level`]: crate::surface::Enclosure::exit_level
+    pub fn sample_free_flight_to_exit(&self, origin: DVec3, d: DVec3, t_max: f64, exit_level: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<(TrackedFlight, f64)> {
+        self.free_flight::<true>(origin, d, t_max, self.checked_exit_level(exit_level)?, rng, stats)
+    }
+
+    /// [`Self::transmittance`] cut at the exit of the host's region, as
+    /// [`Self::sample_free_flight_to_exit`]: the estimate and where it ended.
+    pub fn transmittance_to_exit(&self, origin: DVec3, d: DVec3, t_max: f64, exit_level: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<(f64, f64)> {
+        self.transmittance_until::<true>(origin, d, t_max, self.checked_exit_level(exit_level)?, rng, stats)
+    }
+
+    fn checked_exit_level(&self, exit_level: f64) -> Result<f64> {
+        let top = self.height().top();
+        if exit_level.is_finite() && exit_level >= top {
+            Ok(exit_level)
+        } else {
+            Err(Error::new(ErrorKind::InvalidArgument, format!("exit_level must be finite and at least the shell's top ({top:e}), got {exit_level:e}")))
+        }
+    }
+
+    /// The flight, and where it ended when it passed: `t_max`, or the exit of the host's region
+    /// (`EXITS`, at `exit_level`; `+∞` without: the calls without an exit compile without its
+    /// checks, a hot path).
+    fn free_flight<const EXITS: bool>(&self, origin: DVec3, d: DVec3, t_max: f64, exit_level: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<(TrackedFlight, f64)> {
+        // Missing the box that holds the region: outside it from the origin on.
+        let Some((t_enter, t_exit)) = self.clip(origin, d, t_max, exit_level) else { return Ok((TrackedFlight::Pass, ended::<EXITS>(t_max, 0.0))) };
+        if EXITS && t_enter > 0.0 {
+            return Ok((TrackedFlight::Pass, 0.0));
+        }
         let mut cache = S::Cache::default();
         let mut t = t_enter;
         let mut p = ray_point(origin, t, d)?;
@@ -827,9 +876,12 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         // Segments that start at a rejected tentative collision spend the tentative budget.
         let mut segments = 0;
         while segments < MAX_SEGMENTS {
-            (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, &mut cache, stats)?;
+            (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, exit_level, &mut cache, stats)?;
             if !(t < t_exit) {
-                return Ok(TrackedFlight::Pass);
+                return Ok((TrackedFlight::Pass, ended::<EXITS>(t_max, t_exit)));
+            }
+            if EXITS && start.f > exit_level {
+                return Ok((TrackedFlight::Pass, t));
             }
             let seg = self.next_segment(t, p, &start, d, t_exit - t, previous, &mut cache, stats)?;
             let mut s = 0.0;
@@ -851,7 +903,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     // completed where the tracker's queries left it out (MeanSurface::uv).
                     let uv = if self.complete_uv { self.surface.uv(p, &point) } else { point.uv };
                     let point = SurfacePoint { normal: point.normal.normalize(), uv, ..point };
-                    return Ok(TrackedFlight::Scatter { t: seg.t + s, point, local });
+                    return Ok((TrackedFlight::Scatter { t: seg.t + s, point, local }, seg.t + s));
                 }
                 // (A tentative collision at the segment's start would not advance the ray.)
                 if Self::restarts_at_tentative(&seg) && seg.t + s > seg.t {
@@ -877,7 +929,16 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// An unbiased estimate of the transmittance along `origin + t d`, `t ∈ [0, t_max]`, by
     /// residual ratio tracking against the segment majorants and controls.
     pub fn transmittance(&self, origin: DVec3, d: DVec3, t_max: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<f64> {
-        let Some((t_enter, t_exit)) = self.clip(origin, d, t_max) else { return Ok(1.0) };
+        Ok(self.transmittance_until::<false>(origin, d, t_max, f64::INFINITY, rng, stats)?.0)
+    }
+
+    /// The estimate, and where it ended (as [`Self::free_flight`]; where it reached 0, the
+    /// distance reached).
+    fn transmittance_until<const EXITS: bool>(&self, origin: DVec3, d: DVec3, t_max: f64, exit_level: f64, rng: &mut Pcg32, stats: &mut TrackStats) -> Result<(f64, f64)> {
+        let Some((t_enter, t_exit)) = self.clip(origin, d, t_max, exit_level) else { return Ok((1.0, ended::<EXITS>(t_max, 0.0))) };
+        if EXITS && t_enter > 0.0 {
+            return Ok((1.0, 0.0));
+        }
         let mut cache = S::Cache::default();
         let mut t = t_enter;
         let mut p = ray_point(origin, t, d)?;
@@ -888,9 +949,12 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         // Segments that start at a residual tentative collision spend the tentative budget.
         let mut segments = 0;
         while segments < MAX_SEGMENTS {
-            (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, &mut cache, stats)?;
+            (t, p, start) = self.skip_above(t, p, start, origin, d, t_exit, exit_level, &mut cache, stats)?;
             if !(t < t_exit) {
-                return Ok(transmittance);
+                return Ok((transmittance, ended::<EXITS>(t_max, t_exit)));
+            }
+            if EXITS && start.f > exit_level {
+                return Ok((transmittance, t));
             }
             let mut seg = self.next_segment(t, p, &start, d, t_exit - t, previous, &mut cache, stats)?;
             // The control needs ρ(f_hi; σ) <= ρ(f; σ(p)): only with σ known on the segment (a
@@ -910,7 +974,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             if seg.s_lo > 0.0 && !restartable {
                 transmittance *= (-control_depth(seg.bound.length)).exp();
                 if !roulette(&mut transmittance, rng) {
-                    return Ok(0.0);
+                    return Ok((0.0, t));
                 }
             }
             let mut s = 0.0;
@@ -938,7 +1002,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     restart = Some((seg.t + s, seg.p + s * d, point));
                 }
                 if !roulette(&mut transmittance, rng) {
-                    return Ok(0.0);
+                    return Ok((0.0, seg.t + s));
                 }
                 if restart.is_some() {
                     break;
@@ -953,7 +1017,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     if seg.s_lo > 0.0 && restartable {
                         transmittance *= (-control_depth(seg.bound.length)).exp();
                         if !roulette(&mut transmittance, rng) {
-                            return Ok(0.0);
+                            return Ok((0.0, seg.t + seg.bound.length));
                         }
                     }
                     segments += 1;
@@ -963,6 +1027,16 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             };
         }
         Err(too_many_segments())
+    }
+}
+
+/// Where a call that passed ended: at `t_max` without an exit level, else at the end of the
+/// clipped interval (`t_max`, or past the box that holds the host's region).
+fn ended<const EXITS: bool>(t_max: f64, t_clipped: f64) -> f64 {
+    if EXITS {
+        t_clipped
+    } else {
+        t_max
     }
 }
 

@@ -608,8 +608,26 @@ fn enclosure_contains_the_region() {
             let p = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]);
             let f = s.point(p).unwrap().f;
             assert!(f >= level, "{name}: the enclosure's point {p} has f = {f} < {level}");
+            // The exit level bounds f on the faces, and just inside them (moved toward the
+            // region along the face's normal, by a hundredth of the level).
+            assert!(f <= e.exit_level, "{name}: the enclosure's point {p} has f = {f} above its exit level {}", e.exit_level);
+            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+            let q = p - 0.01 * level * n;
+            if crossings(&e.positions, &e.triangles, q, d) % 2 == 1 {
+                let f = s.point(q).unwrap().f;
+                assert!(f <= e.exit_level, "{name}: {q} inside the enclosure has f = {f} above its exit level {}", e.exit_level);
+            }
         }
-        println!("{name}, level {level}: {} triangles, cell {:.4}, built in {built:.2} s, {inside} region points inside ({near} pushed to the top)", e.triangles.len(), e.cell);
+        // Every point inside has f <= exit_level, which is at least the level.
+        assert!(e.exit_level >= level);
+        for _ in 0..2000 {
+            let p = b.min + (b.max - b.min) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            if crossings(&e.positions, &e.triangles, p, d) % 2 == 1 {
+                let f = s.point(p).unwrap().f;
+                assert!(f <= e.exit_level, "{name}: {p} inside the enclosure has f = {f} above its exit level {}", e.exit_level);
+            }
+        }
+        println!("{name}, level {level}: {} triangles, cell {:.4}, exit level {:.4}, built in {built:.2} s, {inside} region points inside ({near} pushed to the top)", e.triangles.len(), e.cell, e.exit_level);
     }
     for level in [0.003, 0.15] {
         check("torus", &torus, level, true, 1);
@@ -618,6 +636,131 @@ fn enclosure_contains_the_region() {
         check("lumpy torus", &lumpy, level, level < 0.01, 6);
         check("slot", &slot, level, level < 0.01, 5);
         check("sphere", &sphere, level, false, 3);
+    }
+}
+
+/// The first crossing after `t0` of the ray `o + t d` with a triangle mesh (Möller–Trumbore).
+fn first_crossing(positions: &[DVec3], triangles: &[[u32; 3]], o: DVec3, d: DVec3, t0: f64) -> Option<f64> {
+    let mut first: Option<f64> = None;
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let pv = d.cross(e2);
+        let det = e1.dot(pv);
+        if det.abs() < 1e-14 {
+            continue;
+        }
+        let tv = o - a;
+        let (u, qv) = (tv.dot(pv) / det, tv.cross(e1));
+        let (v, s) = (d.dot(qv) / det, e2.dot(qv) / det);
+        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && s > t0 && first.map_or(true, |f| s < f) {
+            first = Some(s);
+        }
+    }
+    first
+}
+
+#[test]
+fn flights_that_find_their_exit_agree_with_ray_casts() {
+    // A host that lets the tracker find the ray's exit from the enclosure (exit level) and one
+    // that casts the ray to each exit and entry of the enclosure see the same first collision
+    // along whole rays through a torus shell (thin: the mesh's own enclosure; thick: the
+    // voxel one), and the same transmittance; where the tracker reports an exit, the ray is
+    // outside the enclosure. Rays start inside the enclosure: on the mean surface and on the
+    // enclosure's faces, in random directions (some cross the hole into the other side).
+    let torus = mesh_surface(&meshes::torus(1.0, 0.4, 32, 16));
+    for (k, sigma) in [0.001, 0.03].into_iter().enumerate() {
+        let m = medium(Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), sigma);
+        let tracker = Tracker::new(&m, &torus);
+        let e = macrofacet::surface::enclosure(&torus, m.height.top(), 0.0).unwrap();
+        let mut rng = Pcg32::new(71 + k as u64, 0);
+        let inside = |p: DVec3| crossings(&e.positions, &e.triangles, p, DVec3::new(0.5377, 0.8131, 0.2231).normalize()) % 2 == 1;
+        let mut stats = TrackStats::default();
+        // The whole ray cast at the enclosure: the first collision, or None.
+        let cast = |o: DVec3, d: DVec3, rng: &mut Pcg32, stats: &mut TrackStats| -> (Option<f64>, f64) {
+            let (mut t, mut transmittance) = (0.0, 1.0);
+            loop {
+                let exit = first_crossing(&e.positions, &e.triangles, o, d, t).unwrap();
+                let p = o + t * d;
+                if let TrackedFlight::Scatter { t: s, .. } = tracker.sample_free_flight(p, d, exit - t, rng, stats).unwrap() {
+                    return (Some(t + s), 0.0);
+                }
+                transmittance *= tracker.transmittance(p, d, exit - t, rng, stats).unwrap();
+                match first_crossing(&e.positions, &e.triangles, o, d, exit) {
+                    Some(entry) => t = entry,
+                    None => return (None, transmittance),
+                }
+            }
+        };
+        let mut exits = 0;
+        let mut own = |o: DVec3, d: DVec3, rng: &mut Pcg32, stats: &mut TrackStats| -> (Option<f64>, f64) {
+            let (mut t, mut transmittance) = (0.0, 1.0);
+            loop {
+                let p = o + t * d;
+                let (flight, end) = tracker.sample_free_flight_to_exit(p, d, f64::INFINITY, e.exit_level, rng, stats).unwrap();
+                if let TrackedFlight::Scatter { t: s, .. } = flight {
+                    return (Some(t + s), 0.0);
+                }
+                let (tr, end_t) = tracker.transmittance_to_exit(p, d, f64::INFINITY, e.exit_level, rng, stats).unwrap();
+                transmittance *= tr;
+                // Both calls end outside the enclosure (or where the estimate reached 0).
+                for at in [end].into_iter().chain((tr > 0.0).then_some(end_t)) {
+                    let q = p + at * d;
+                    assert!(!inside(q), "sigma {sigma}: the exit {q} lies inside the enclosure");
+                    exits += 1;
+                }
+                match first_crossing(&e.positions, &e.triangles, o, d, t + end) {
+                    Some(entry) => t = entry,
+                    None => return (None, transmittance),
+                }
+            }
+        };
+        let n = 3000;
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        let (mut pass_a, mut pass_b, mut tr_a, mut tr_b) = (0, 0, Vec::new(), Vec::new());
+        for i in 0..n {
+            let origin = if i % 2 == 0 {
+                // a point of the mean surface
+                let q = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5) * 3.0;
+                let s = torus.point(q).unwrap();
+                q - s.f * s.normal
+            } else {
+                let t = e.triangles[(rng.next_f64() * e.triangles.len() as f64) as usize].map(|i| e.positions[i as usize]);
+                let (u, v) = (rng.next_f64(), rng.next_f64());
+                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+                t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]) - 1e-6 * n
+            };
+            if !inside(origin) {
+                continue;
+            }
+            let z = 2.0 * rng.next_f64() - 1.0;
+            let phi = std::f64::consts::TAU * rng.next_f64();
+            let d = DVec3::new((1.0 - z * z).sqrt() * phi.cos(), (1.0 - z * z).sqrt() * phi.sin(), z);
+            let (fa, ta) = cast(origin, d, &mut rng, &mut stats);
+            let (fb, tb) = own(origin, d, &mut rng, &mut stats);
+            match fa {
+                Some(t) => a.push(t),
+                None => pass_a += 1,
+            }
+            match fb {
+                Some(t) => b.push(t),
+                None => pass_b += 1,
+            }
+            tr_a.push(ta);
+            tr_b.push(tb);
+        }
+        let rays = a.len() + pass_a;
+        let p = ks_two_sample(&mut a, &mut b);
+        let (pa, pb) = (pass_a as f64 / rays as f64, pass_b as f64 / rays as f64);
+        let z_pass = (pa - pb) / ((pa * (1.0 - pa) + pb * (1.0 - pb)) / rays as f64).sqrt().max(1e-12);
+        let ((ma, sa), (mb, sb)) = (mean_and_standard_error(tr_a.iter().copied()), mean_and_standard_error(tr_b.iter().copied()));
+        let z_tr = (ma - mb) / (sa * sa + sb * sb).sqrt().max(1e-12);
+        println!("sigma {sigma}: {rays} rays, exit level {:.5}, {exits} exits checked, collision KS p = {p:.3}, passing {pa:.4} vs {pb:.4} (z = {z_pass:.2}), transmittance {ma:.4} vs {mb:.4} (z = {z_tr:.2})", e.exit_level);
+        assert!(rays > 1000 && exits > 500);
+        assert!(p > 1e-3, "sigma {sigma}: collision distances differ, KS p = {p}");
+        assert!(z_pass.abs() < 3.5 && z_tr.abs() < 3.5, "sigma {sigma}: passing z = {z_pass}, transmittance z = {z_tr}");
+        assert_eq!(stats.majorant_violations, 0);
     }
 }
 

@@ -47,6 +47,13 @@ pub struct Enclosure {
     pub triangles: Vec<[u32; 3]>,
     /// The cell size used.
     pub cell: f64,
+    /// A level of `f` that no point the enclosure encloses exceeds, nor any point within
+    /// single-precision rounding of it (a host's `f32` copy of the vertices, and of a ray's
+    /// origin): above it a ray has left the region ([`crate::tracking::Tracker::sample_free_flight_to_exit`]).
+    /// A kept cell's centre lies below the level plus half a cell diagonal, so its corners below
+    /// the level plus a diagonal; an offset face's points lie within the largest vertex offset
+    /// of their mesh face (`mesh/offset.rs`).
+    pub exit_level: f64,
 }
 
 /// The enclosure of `f < level` with cells of about `cell` (0: the surface's own offset
@@ -217,7 +224,9 @@ pub fn enclosure<S: MeanSurface>(surface: &S, level: f64, cell: f64) -> Result<E
         }
     }
     faces.sort_unstable();
-    let mut out = Enclosure { cell: h, ..Default::default() };
+    // The hair above the level is in `level` already; another covers the vertices' rounding.
+    let exit_level = level + (2.0 * half_diagonal + 1e-3 * h * surface.lipschitz());
+    let mut out = Enclosure { cell: h, exit_level, ..Default::default() };
     // A corner's vertex, numbered in order of first use. The faces come in increasing z, and a
     // face's corners lie on its cell's two z planes, so two planes of ids (by parity of z, each
     // entry stamped with its z) remember every corner that can still be shared.

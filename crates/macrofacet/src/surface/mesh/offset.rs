@@ -75,6 +75,8 @@ impl TriangleMesh {
             }
         }
         let mut offset = vertices.clone();
+        // The largest offset: a point of an offset face lies within it of its mesh face.
+        let mut reach = 0.0f64;
         for (v, q) in offset.iter_mut().enumerate() {
             let c = least_cos[v];
             if c == f64::INFINITY {
@@ -84,6 +86,7 @@ impl TriangleMesh {
                 return None;
             }
             *q += (target / c) * normals[v];
+            reach = reach.max(target / c);
         }
         if offset.iter().any(|q| !q.is_finite()) {
             return None;
@@ -112,7 +115,10 @@ impl TriangleMesh {
         }
         // The vertices the faces use, numbered in order of first use.
         let mut number = vec![u32::MAX; offset.len()];
-        let mut out = Enclosure::default();
+        // Points between the mesh and the offset lie in the prisms between each face and its
+        // offset (the offset is embedded): within `reach` of a face. The margin covers a host's
+        // rounding to f32 (of the vertices, and of a ray's origin).
+        let mut out = Enclosure { exit_level: reach + (required - level), ..Default::default() };
         for c in &self.corners {
             out.triangles.push(c.map(|v| {
                 if number[v as usize] == u32::MAX {

@@ -92,7 +92,7 @@ std::shared_ptr<Shape> make_region_boundary(const std::shared_ptr<const Shape>& 
         // of a point within it (a ray's origin): a few float ulps of the coordinates
         const Vec3 c = sph->center();
         const float extent = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}) + r;
-        b->exit_level = std::abs(double(r) - sph->radius()) + 8.0 * double(extent) * std::numeric_limits<float>::epsilon();
+        b->exit_level = std::max(level, std::abs(double(r) - sph->radius())) + 8.0 * double(extent) * std::numeric_limits<float>::epsilon();
     } else {
         mf_enclosure* enclosure = nullptr;
         if (mf_surface_enclosure(surface.handle(), nullptr, level, 0.0, &enclosure) != MF_OK)

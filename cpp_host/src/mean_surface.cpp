@@ -3,9 +3,7 @@
 
 #include <macrofacet.h>
 
-#include <algorithm>
 #include <cmath>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -88,11 +86,6 @@ std::shared_ptr<Shape> make_region_boundary(const std::shared_ptr<const Shape>& 
             throw Error(mean->loc, "<shape type=\"sphere\">: the " + medium->name() + " shell (" + std::to_string(level) +
                                        ") is thicker than this flipped sphere's radius");
         b = std::make_shared<SphereShape>(sph->center(), r, sph->flipped());
-        // f of a point inside is at most the float radius's distance from r, and the rounding
-        // of a point within it (a ray's origin): a few float ulps of the coordinates
-        const Vec3 c = sph->center();
-        const float extent = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}) + r;
-        b->exit_level = std::max(level, std::abs(double(r) - sph->radius())) + 8.0 * double(extent) * std::numeric_limits<float>::epsilon();
     } else {
         mf_enclosure* enclosure = nullptr;
         if (mf_surface_enclosure(surface.handle(), nullptr, level, 0.0, &enclosure) != MF_OK)

@@ -926,7 +926,8 @@ private:
         macrofacet_boundaries_.clear();
     }
 
-    /// A macrofacet medium whose region boundary the library built (its exit level known)
+    /// A macrofacet medium whose region boundary is the library's enclosure of a mesh (its exit
+    /// level known; spheres' boundaries have none yet, and in vacuum they are superposed)
     /// finds each ray's exit itself (mf_track_query::exit_level) when no medium transition lies
     /// in the boundary's box grown by that level: a ray inside is then cast against the shapes
     /// in that box only (Scene::add_near_scene), without the boundary, instead of against the
@@ -937,7 +938,7 @@ private:
         for (const auto& s : shapes) {
             auto medium = std::dynamic_pointer_cast<const MacrofacetMedium>(s->interior);
             if (!s->region_boundary || !(s->exit_level > 0) || !medium) continue;
-            // (a flipped sphere's region is unbounded: every ray would be tracked to infinity)
+            // (an unbounded region would track every ray to infinity)
             mf_vec3 lo, hi;
             if (mf_surface_bounding_box(medium->surface().handle(), &lo, &hi) != MF_OK ||
                 !std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z))

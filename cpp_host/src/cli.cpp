@@ -304,6 +304,10 @@ int mfrender_main(int argc, char** argv) {
                                 sdf->grid().nx, sdf->grid().ny, sdf->grid().nz, sdf->grid().value_min, sdf->grid().value_max,
                                 sdf->grid().lipschitz);
             }
+            for (const auto& m : scene->media)
+                if (auto* mm = dynamic_cast<const MacrofacetMedium*>(m.get()); mm && mm->finds_exits())
+                    std::printf("  %s: finds its rays' exits from the region itself (--cast-exits: a ray cast each)\n",
+                                mm->label().c_str());
             return;
         }
         ropts.progress = !quiet && ::isatty(STDERR_FILENO);

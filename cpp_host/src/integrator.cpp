@@ -1,6 +1,8 @@
 // mfhost — volumetric path tracer (see integrator.h).
 #include "integrator.h"
 
+#include <utility>
+
 namespace mf {
 
 namespace {
@@ -9,11 +11,11 @@ constexpr int kMaxNullCrossings = 1024;
 /// A thread's medium-event records, reused from path to path and bounce to bounce (building one
 /// 264-byte record per path and two per bounce cost a thin shell's render about 2 %): a record is
 /// read only after a flight that scattered wrote it (Medium::sample_free_flight says what it
-/// writes), the last event only when the ray leaves one.
+/// writes), the last event only when the ray leaves one. Li passes them round by pointer: the
+/// candidate that wins becomes the nearest, the nearest that scatters the last event, and the
+/// record given up takes the freed role, with no copy.
 struct EventRecords {
-    MediumInteraction last_event;  // the last scattering event in a medium
-    MediumInteraction nearest;     // a bounce's nearest collision so far
-    MediumInteraction candidate;   // one medium's collision
+    MediumInteraction records[3];
 };
 thread_local EventRecords event_records;
 }  // namespace
@@ -89,11 +91,10 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     float prev_pdf = 0.0f;    // its solid-angle pdf
     Vec3 prev_p = ray.o;      // where it was sampled
     int null_crossings = 0;
-    EventRecords& records = event_records;
-    MediumInteraction& last_event = records.last_event;
+    MediumInteraction* last_event = &event_records.records[0];  // the last scattering event in a medium
     bool from_medium_event = false;  // the current ray leaves last_event (the medium's `from`)
-    MediumInteraction& mi = records.nearest;
-    MediumInteraction& mi_m = records.candidate;
+    MediumInteraction* mi = &event_records.records[1];    // a bounce's nearest collision so far
+    MediumInteraction* mi_m = &event_records.records[2];  // one medium's collision
 
     // MIS weights of the two ways to reach a non-delta emitter from a non-delta vertex
     // (LightSampling): next-event estimation (light_pdf) and BSDF / phase sampling (scatter_pdf).
@@ -149,7 +150,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         // ---- media: free flights up to the surface (or infinity). The superposed media and the
         // current one are independent exponential flights: the nearest collision wins, so each is
         // sampled up to the nearest so far (SuperposedMedium, scene.h).
-        const MediumInteraction* from = from_medium_event ? &last_event : nullptr;
+        const MediumInteraction* from = from_medium_event ? last_event : nullptr;
         from_medium_event = false;
         if (vol && (medium || !scene_.superposed_media().empty())) {
             Rgb w(1.0f), pr(1.0f);
@@ -159,9 +160,9 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             if (to_exit) {
                 // Its collision, or its exit, bounds the superposed media's flights
                 float t_end;
-                if (medium->sample_free_flight_to_exit(ray, tmax, sampler, &mi_m, &t_end)) {
-                    mi = mi_m;
-                    tmax = mi.t;
+                if (medium->sample_free_flight_to_exit(ray, tmax, sampler, mi_m, &t_end)) {
+                    std::swap(mi, mi_m);
+                    tmax = mi->t;
                     scattering = medium;
                 } else if (t_end < tmax) {
                     tmax = t_end;
@@ -172,9 +173,9 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             // far; `from` goes to the medium whose event the ray leaves.
             auto fly = [&](const auto& flight, const Medium* owner) {
                 Rgb w_m, pr_m;
-                if (flight.sample_free_flight(ray, tmax, from && from->medium == owner ? from : nullptr, hero, sampler, &mi_m, &w_m, &pr_m)) {
-                    mi = mi_m;
-                    tmax = mi.t;
+                if (flight.sample_free_flight(ray, tmax, from && from->medium == owner ? from : nullptr, hero, sampler, mi_m, &w_m, &pr_m)) {
+                    std::swap(mi, mi_m);
+                    tmax = mi->t;
                     scattering = owner;
                 }
                 w *= w_m;
@@ -195,19 +196,19 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 const PhaseFunction& ph = scattering->phase();
                 Vec3 wo = -ray.d;
                 if (!ph.is_delta())
-                    L += throughput() * direct(mi.p, medium, mi.p, [&](const Vec3& wi, float* pdf) {
-                        return ph.eval_pdf(mi, wo, wi, pdf);
+                    L += throughput() * direct(mi->p, medium, mi->p, [&](const Vec3& wi, float* pdf) {
+                        return ph.eval_pdf(*mi, wo, wi, pdf);
                     });
                 Vec3 wi;
                 float pdf;
                 Rgb pw;
-                if (!ph.sample(mi, wo, sampler, &wi, &pdf, &pw)) break;
+                if (!ph.sample(*mi, wo, sampler, &wi, &pdf, &pw)) break;
                 beta *= pw;
                 prev_delta = ph.is_delta();
                 prev_pdf = pdf;
-                prev_p = mi.p;
-                ray = Ray(mi.p, wi);
-                last_event = mi;
+                prev_p = mi->p;
+                ray = Ray(mi->p, wi);
+                std::swap(last_event, mi);
                 from_medium_event = true;
                 ++depth;
                 if (!russian_roulette()) break;

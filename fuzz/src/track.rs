@@ -217,6 +217,9 @@ impl Scene<'_> {
         };
         assert!(indices.iter().all(|i| (*i as usize) < mesh.vertex_count), "enclosure index out of range");
         let honest = self.host.honest();
+        // The exit level: a number at least the level, above every vertex's f (checked below).
+        let exit_level = check::call(|o| unsafe { mf_enclosure_exit_level(e, o) }).expect("mf_enclosure_exit_level");
+        assert!(!exit_level.is_nan() && exit_level >= level, "exit level {exit_level} for level {level}");
         // A vertex may sit a hair inside for rounding: 1e-9 of the surface's extent (else of the
         // drawn size), or of the vertex's coordinates where that is not a number (the drawn size
         // is NaN when the surface ignores it: a sphere of radius 3.6e250 had every vertex flagged,
@@ -232,6 +235,7 @@ impl Scene<'_> {
                 let slack = slack_at(v);
                 if let Some(p) = self.eval(v) {
                     assert!(p.f >= level - slack, "enclosure vertex {v} inside the region: f = {} < level {level}", p.f);
+                    assert!(p.f <= exit_level + slack, "enclosure vertex {v} above the exit level: f = {} > {exit_level}", p.f);
                 }
             }
         }

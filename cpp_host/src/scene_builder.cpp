@@ -937,12 +937,8 @@ private:
         const std::vector<std::shared_ptr<Shape>> shapes = scene_->shapes();
         for (const auto& s : shapes) {
             auto medium = std::dynamic_pointer_cast<const MacrofacetMedium>(s->interior);
+            // (an exit level comes with a library enclosure, which only a bounded surface has)
             if (!s->region_boundary || !(s->exit_level > 0) || !medium) continue;
-            // (an unbounded region would track every ray to infinity)
-            mf_vec3 lo, hi;
-            if (mf_surface_bounding_box(medium->surface().handle(), &lo, &hi) != MF_OK ||
-                !std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z))
-                continue;
             Aabb box = s->bounds();
             const float grow = float(s->exit_level) + 1e-4f * std::max({box.extent().x, box.extent().y, box.extent().z});
             box.lo = box.lo - Vec3(grow);

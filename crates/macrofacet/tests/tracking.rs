@@ -540,25 +540,26 @@ fn mesh_distance_is_exact_near_the_surface() {
     assert_eq!(checked, 20000);
 }
 
-/// Crossings of the ray `o + t d`, `t > 0`, with a triangle mesh (Möller–Trumbore).
+/// The distances `t` at which the line `o + t d` crosses the triangles of a mesh (Möller–Trumbore).
+fn hits<'a>(positions: &'a [DVec3], triangles: &'a [[u32; 3]], o: DVec3, d: DVec3) -> impl Iterator<Item = f64> + 'a {
+    triangles.iter().filter_map(move |t| {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let pv = d.cross(e2);
+        let det = e1.dot(pv);
+        if det.abs() < 1e-14 {
+            return None;
+        }
+        let tv = o - a;
+        let (u, qv) = (tv.dot(pv) / det, tv.cross(e1));
+        let v = d.dot(qv) / det;
+        (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| e2.dot(qv) / det)
+    })
+}
+
+/// Crossings of the ray `o + t d`, `t > 0`, with a triangle mesh.
 fn crossings(positions: &[DVec3], triangles: &[[u32; 3]], o: DVec3, d: DVec3) -> usize {
-    triangles
-        .iter()
-        .filter(|t| {
-            let [a, b, c] = t.map(|i| positions[i as usize]);
-            let (e1, e2) = (b - a, c - a);
-            let pv = d.cross(e2);
-            let det = e1.dot(pv);
-            if det.abs() < 1e-14 {
-                return false;
-            }
-            let tv = o - a;
-            let u = tv.dot(pv) / det;
-            let qv = tv.cross(e1);
-            let v = d.dot(qv) / det;
-            u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(qv) / det > 0.0
-        })
-        .count()
+    hits(positions, triangles, o, d).filter(|&t| t > 0.0).count()
 }
 
 #[test]
@@ -639,25 +640,9 @@ fn enclosure_contains_the_region() {
     }
 }
 
-/// The first crossing after `t0` of the ray `o + t d` with a triangle mesh (Möller–Trumbore).
+/// The first crossing after `t0` of the ray `o + t d` with a triangle mesh.
 fn first_crossing(positions: &[DVec3], triangles: &[[u32; 3]], o: DVec3, d: DVec3, t0: f64) -> Option<f64> {
-    let mut first: Option<f64> = None;
-    for t in triangles {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        let (e1, e2) = (b - a, c - a);
-        let pv = d.cross(e2);
-        let det = e1.dot(pv);
-        if det.abs() < 1e-14 {
-            continue;
-        }
-        let tv = o - a;
-        let (u, qv) = (tv.dot(pv) / det, tv.cross(e1));
-        let (v, s) = (d.dot(qv) / det, e2.dot(qv) / det);
-        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && s > t0 && first.map_or(true, |f| s < f) {
-            first = Some(s);
-        }
-    }
-    first
+    hits(positions, triangles, o, d).filter(|&t| t > t0).min_by(f64::total_cmp)
 }
 
 #[test]

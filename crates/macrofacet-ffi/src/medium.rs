@@ -6,7 +6,7 @@
 
 use super::{arg, boundary, free_handle, into_handle, mf_params, mf_status, out, FfiError, FfiResult};
 use macrofacet::error::{Error, ErrorKind};
-use macrofacet::frame::{check_direction, Frame};
+use macrofacet::frame::{not_a_direction, unit_direction, Frame};
 use macrofacet::medium::{FreeFlight, MacrofacetMedium};
 use macrofacet::params::medium_from_params;
 use macrofacet::phase::PHASE_SAMPLE_DIMENSIONS;
@@ -140,7 +140,10 @@ pub(crate) fn frame(f: &mf_frame) -> FfiResult<Frame> {
 
 /// A world-space unit direction, in the local frame.
 pub(crate) fn local_direction(frame: &Frame, name: &str, v: mf_vec3) -> FfiResult<DVec3> {
-    Ok(frame.to_local(check_direction(name, v.into())?))
+    match unit_direction(v.into()) {
+        Some(d) => Ok(frame.to_local(d)),
+        None => Err(not_a_direction(name, v.into()).into()),
+    }
 }
 
 fn finite(name: &str, x: f64) -> FfiResult<f64> {

@@ -13,7 +13,7 @@ use super::medium::{mf_frame, mf_medium, mf_vec3};
 use super::surface::{with_surface, mf_surface, SurfaceVisitor};
 use super::{arg, boundary, mf_status, out, FfiError, FfiResult};
 use macrofacet::error::{Error, ErrorKind};
-use macrofacet::frame::check_direction;
+use macrofacet::frame::{not_a_direction, unit_direction};
 use macrofacet::medium::MacrofacetMedium;
 use macrofacet::rng::Pcg32;
 use macrofacet::field::{Constant, MediumField};
@@ -101,7 +101,7 @@ fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64, f64)> {
     if !origin.is_finite() {
         return Err(Error::new(ErrorKind::InvalidArgument, format!("origin must be finite, got {origin}")).into());
     }
-    let d = check_direction("d", q.d.into())?;
+    let Some(d) = unit_direction(q.d.into()) else { return Err(not_a_direction("d", q.d.into()).into()) };
     if !(q.t_max >= 0.0) {
         return Err(Error::new(ErrorKind::InvalidArgument, format!("t_max must be >= 0 (or +inf), got {}", q.t_max)).into());
     }

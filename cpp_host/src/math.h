@@ -122,6 +122,9 @@ struct Aabb {
     bool valid() const { return lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z; }
     Vec3 center() const { return (lo + hi) * 0.5f; }
     Vec3 extent() const { return hi - lo; }
+    bool contains(const Vec3& p) const {
+        return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+    }
     /// Narrows [*t0, *t1] to where o + t d lies in the box (slab test; a NaN from a zero
     /// component of d on a slab's plane leaves it); false if that is empty.
     bool clip(const Vec3& o, const Vec3& d, float* t0, float* t1) const {

@@ -117,7 +117,7 @@ private:
     struct Traced {
         RTCScene scene = nullptr;
         std::vector<const Shape*> by_geom_id;
-        Aabb bounds;  // of the shapes
+        Aabb bounds;  // of the shapes, padded (Scene::commit, add_near_scene)
         Aabb region;  // add_near_scene
         void attach(RTCDevice device, const Shape& s);
         bool intersect(const Ray& ray, SurfaceHit* hit) const;

@@ -119,9 +119,13 @@ impl MacrofacetPhase {
     /// A specular flake's `p(wi, wo) = F D(m) / (4 σ(wi))` per channel, with `D(m) / (4 σ(wi))`
     /// (the density of exact visible-normal sampling); zero where `wi` sees no flake or the
     /// directions are back to back.
+    /// (`D(m)` first: where it is zero, as for a height field's `m` below the horizon, neither
+    /// the projected area nor the Fresnel term is needed.)
     fn specular_lobe(&self, wi: DVec3, wo: DVec3) -> (Rgb, f64) {
-        let (Some(area), Some((m, cos))) = (self.ndf.visible_area(wi), half_vector(wi, wo)) else { return ([0.0; 3], 0.0) };
-        let p = self.ndf.d(m) / (4.0 * area);
+        let Some((m, cos)) = half_vector(wi, wo) else { return ([0.0; 3], 0.0) };
+        let d = self.ndf.d(m);
+        let Some(area) = (d > 0.0).then(|| self.ndf.visible_area(wi)).flatten() else { return ([0.0; 3], 0.0) };
+        let p = d / (4.0 * area);
         (self.micro_bsdf.specular(cos).unwrap_or([0.0; 3]).map(|x| x * p), p)
     }
 

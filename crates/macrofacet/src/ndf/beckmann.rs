@@ -37,17 +37,24 @@ impl Beckmann {
 impl MicrofacetDistribution for Beckmann {
     /// `D(m) = exp(-(m_x²/α_u² + m_y²/α_v²)/m_z²) / (π α_u α_v m_z⁴)` for `m_z > 0`.
     ///
-    /// Formed as one exponential `exp(−e − 4 ln m_z)`: toward the horizon `exp(−e)` underflows
-    /// and `m_z⁴` underflows with it (`m_z ≲ 1e-81`), and their quotient would be `0/0` = NaN;
-    /// the exponent `−e − 4 ln m_z` is `−∞` or finite, never NaN, and `D → 0` there is the limit.
+    /// Toward the horizon `exp(−e)` underflows and `m_z⁴` underflows with it (`m_z ≲ 1e-81`), and
+    /// their quotient would be `0/0` = NaN: there it is formed as one exponential
+    /// `exp(−e − 4 ln m_z)`, whose exponent is `−∞` or finite, never NaN, and `D → 0` is the
+    /// limit. Where both are normal numbers (`e < 700`, `m_z > 1e-60`) the quotient itself,
+    /// without the logarithm.
     fn d(&self, m: DVec3) -> f64 {
         if m.z <= 0.0 {
             return 0.0;
         }
         let tilt = (m.x / self.alpha_u).powi(2) + (m.y / self.alpha_v).powi(2);
+        let z2 = m.z * m.z;
         // `tilt = 0` only at the pole (`m_z = 1`), where `e = 0` (not `0/0` when `m_z²` underflows).
-        let e = if tilt == 0.0 { 0.0 } else { tilt / (m.z * m.z) };
-        (-e - 4.0 * m.z.ln()).exp() / (PI * self.alpha_u * self.alpha_v)
+        let e = if tilt == 0.0 { 0.0 } else { tilt / z2 };
+        let scale = PI * self.alpha_u * self.alpha_v;
+        if e < 700.0 && m.z > 1e-60 {
+            return (-e).exp() / (scale * z2 * z2);
+        }
+        (-e - 4.0 * m.z.ln()).exp() / scale
     }
 
     /// seeds/000 Eq. 32 with `alpha_z = 0`: the Beckmann projected area `(1 + Λ(w)) cos θ_w`.

@@ -159,7 +159,8 @@ pub(crate) fn sample_shifted_linear_gaussian(c: f64, u: f64) -> f64 {
             e * (1.0 + c * mills_ratio(x))
         }
     };
-    let z = if c >= 0.0 { pdf_c + c * normal_cdf(c) } else { tail(-c, gauss(-c)) };
+    // (Φ(c) = 1 − Φ(−c) for c >= 0 without cancellation: Φ(−c) <= 1/2.)
+    let z = if c >= 0.0 { pdf_c + c * (1.0 - cdf_minus_c) } else { tail(-c, gauss(-c)) };
     let ln_target = if lower_tail { (u * z).ln() } else { ((-u).ln_1p()) + z.ln() };
     // h(x) = ±(ln tail(x) − ln target) is increasing, with h' = p/T and h'' = p'/T ∓ (p/T)²
     // for the density p = (x + c) φ(x), p' = φ(x) (1 − x (x + c)).

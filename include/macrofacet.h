@@ -1252,6 +1252,26 @@ enum mf_status mf_track_transmittance_batch(const struct mf_medium *medium,
                                             size_t count,
                                             struct mf_transmittance *out_transmittances);
 
+/**
+ * The opaque core of `medium` about `surface` (stationary parameters; see the Rust crate's
+ * `opaque_core` module for the bound): a ray from a point with `f >= *out_start_level` that
+ * reaches `f <= *out_core_level` has a transmittance below `e^-750`, so small that its estimate
+ * rounds to 0 in double precision. A host may treat the region `f <= core_level` as opaque for
+ * such rays, e.g. skip a shadow ray from a collision (its `f` at least `start_level`) that meets
+ * a sphere's core, before the phase evaluation and the tracking call. `*out_start_level` is
+ * `−8σ`; `*out_core_level` is `−INFINITY` when the bound gives no core (a projected area
+ * without a positive lower bound over the directions a descending ray takes: on a mesh, whose
+ * frame normals are not the distance's gradient, over every direction). A medium with a field
+ * (`mf_track_*`'s `field`) varies in space: the levels do not hold for it.
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_track_opaque_core(const struct mf_medium *medium,
+                                    const struct mf_surface *surface,
+                                    double *out_start_level,
+                                    double *out_core_level);
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif  // __cplusplus

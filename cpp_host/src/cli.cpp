@@ -17,6 +17,7 @@
 
 #include "image_io.h"
 #include "field.h"
+#include "mean_surface.h"
 #include "medium_macrofacet.h"
 #include "render.h"
 #include "scene_builder.h"
@@ -31,6 +32,7 @@ namespace {
 const char* kUsage =
     "usage: mfrender scene.xml [-o out.exr] [--spp N] [--seed S] [--threads N] [--max-depth N]\n"
     "                [-D name=value]... [--shard I/N] [--media-boundaries] [--cast-exits]\n"
+    "                [--no-opaque-cores]\n"
     "                [--quiet] [--check]\n"
     "                [--help]\n"
     "       mfrender merge -o out.exr part.mfpart...\n"
@@ -52,6 +54,9 @@ const char* kUsage =
     "  --cast-exits   cast a ray for every exit from a macrofacet medium's region (default: a\n"
     "                 medium whose boundary the library built and near which nothing else lies\n"
     "                 finds the exit while it tracks; the image is the same, to noise)\n"
+    "  --no-opaque-cores  trace every shadow ray into a sphere's shell (default: a ray from\n"
+    "                 outside its core that meets it ends there: its transmittance, below\n"
+    "                 e^-750, rounds to 0; mf_track_opaque_core); the same image, to noise\n"
     "  --quiet        no progress bar and no summary line\n"
     "  --check        parse and build the scene, print a summary, do not render; every problem\n"
     "                 of the file is listed (rendering lists them too)\n"
@@ -224,6 +229,8 @@ int mfrender_main(int argc, char** argv) {
                 bopts.superpose_macrofacet = false;
             } else if (a == "--cast-exits") {
                 bopts.media_find_exits = false;
+            } else if (a == "--no-opaque-cores") {
+                bopts.opaque_cores = false;
             } else if (a == "--quiet" || a == "-q") {
                 quiet = true;
             } else if (a == "--check") {
@@ -304,10 +311,17 @@ int mfrender_main(int argc, char** argv) {
                                 sdf->grid().nx, sdf->grid().ny, sdf->grid().nz, sdf->grid().value_min, sdf->grid().value_max,
                                 sdf->grid().lipschitz);
             }
-            for (const auto& m : scene->media)
-                if (auto* mm = dynamic_cast<const MacrofacetMedium*>(m.get()); mm && mm->finds_exits())
+            for (const auto& m : scene->media) {
+                auto* mm = dynamic_cast<const MacrofacetMedium*>(m.get());
+                if (!mm) continue;
+                if (mm->finds_exits())
                     std::printf("  %s: finds its rays' exits from the region itself (--cast-exits: a ray cast each)\n",
                                 mm->label().c_str());
+                double start, core;
+                if (bopts.opaque_cores && mm->surface().sphere() && mm->opaque_core(&start, &core) && mm->surface().sphere()->radius + core > 0)
+                    std::printf("  %s: shadow rays from f >= %g end at its opaque core, f <= %g (--no-opaque-cores: tracked)\n",
+                                mm->label().c_str(), start, core);
+            }
             return;
         }
         ropts.progress = !quiet && ::isatty(STDERR_FILENO);

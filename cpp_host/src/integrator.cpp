@@ -121,10 +121,13 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         EmitterSample es;
         if (!emitters[idx]->sample_li(ref, u, &es)) return Rgb(0.0f);
         if (es.Li.is_black() || !(es.pdf > 0) || (!es.delta && !nee_non_delta)) return Rgb(0.0f);
+        float dist = std::isfinite(es.dist) ? es.dist * (1.0f - 1e-4f) : kInf;
+        // A shell's opaque core ends the shadow ray with a transmittance that rounds to 0: no
+        // value, no tracking (a collision's light from inside the sphere, a floor's through it).
+        if (vol && scene_.blocked_by_opaque_core(origin, es.wi, dist)) return Rgb(0.0f);
         float f_pdf = 0.0f;
         Rgb f = eval(es.wi, &f_pdf);
         if (f.is_black()) return Rgb(0.0f);
-        float dist = std::isfinite(es.dist) ? es.dist * (1.0f - 1e-4f) : kInf;
         Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler);
         if (T.is_black()) return Rgb(0.0f);
         float light_pdf = es.pdf * sel_pdf;

@@ -28,7 +28,8 @@ std::string library_error() {
 std::shared_ptr<const MeanSurface> MeanSurface::of(const Shape& shape) {
     mf_surface* handle = nullptr;
     mf_status st = MF_OK;
-    if (auto* sphere = dynamic_cast<const SphereShape*>(&shape)) {
+    const auto* sphere = dynamic_cast<const SphereShape*>(&shape);
+    if (sphere) {
         Vec3 c = sphere->center(), pole = sphere->pole();
         st = mf_surface_new_sphere(mf_vec3{c.x, c.y, c.z}, sphere->radius(), sphere->flipped(), mf_vec3{pole.x, pole.y, pole.z}, &handle);
     } else if (auto* mesh = dynamic_cast<const MeshShape*>(&shape)) {
@@ -62,7 +63,12 @@ std::shared_ptr<const MeanSurface> MeanSurface::of(const Shape& shape) {
     }
     if (st != MF_OK)
         throw Error(shape.loc, "<shape type=\"" + shape.kind() + "\">: not a valid mean surface: " + library_error());
-    return std::shared_ptr<const MeanSurface>(new MeanSurface(handle));
+    auto surface = std::shared_ptr<MeanSurface>(new MeanSurface(handle));
+    if (sphere && !sphere->flipped()) {
+        surface->sphere_ = Sphere{sphere->center(), sphere->radius()};
+        surface->is_sphere_ = true;
+    }
+    return surface;
 }
 
 MeanSurface::~MeanSurface() { mf_surface_free(handle_); }

@@ -41,9 +41,19 @@ public:
     /// Signed distance at p, with the frame normal and tangent (double precision).
     double eval(const Vec3& p, Vec3* normal, Vec3* tangent) const;
 
+    /// A sphere's centre and radius, where f = |p - c| - r (not flipped).
+    struct Sphere {
+        Vec3 center;
+        double radius;
+    };
+    /// The sphere this surface is, or null (a mesh, a grid, a flipped sphere).
+    const Sphere* sphere() const { return is_sphere_ ? &sphere_ : nullptr; }
+
 private:
     explicit MeanSurface(mf_surface* handle) : handle_(handle) {}
     mf_surface* handle_;
+    Sphere sphere_{};
+    bool is_sphere_ = false;
 };
 
 /// The boundary of the region f < level of `mean` as a null-BSDF shape whose interior is

@@ -117,7 +117,9 @@ MacrofacetMedium::MacrofacetMedium(mf_medium* handle, std::shared_ptr<const Mean
                                    std::shared_ptr<const LibraryField> field)
     : handle_(handle), surface_(std::move(surface)), field_(std::move(field)), label_(std::move(label)) {
     phase_ = std::make_shared<MacrofacetPhaseFn>(handle_, label_);
-    if (mf_medium_shell_top(handle_, &top_) != MF_OK) {
+    // (Its levels hold for stationary parameters only.)
+    if (mf_medium_shell_top(handle_, &top_) != MF_OK ||
+        (!field_ && mf_track_opaque_core(handle_, surface_->handle(), &core_start_, &core_level_) != MF_OK)) {
         std::string msg = mf_last_error();
         mf_medium_free(handle_);
         throw Error(label_ + ": " + msg);

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -58,6 +59,14 @@ public:
     const MeanSurface& surface() const { return *surface_; }
     /// The signed distance of the shell's top face, k·sigma (mf_medium_shell_top).
     double shell_top() const { return top_; }
+    /// The opaque core (mf_track_opaque_core): a ray from f >= *start_level that reaches
+    /// f <= *core_level has a transmittance that rounds to 0. False without one (a field, or no
+    /// bound).
+    bool opaque_core(double* start_level, double* core_level) const {
+        *start_level = core_start_;
+        *core_level = core_level_;
+        return std::isfinite(core_level_);
+    }
     /// The real sigma_t at p for direction d, with the surface's frame and signed distance there.
     double sigma_t_at(const Vec3& p, const Vec3& d, Vec3* normal, Vec3* tangent, float* f) const;
     /// Tentative collisions whose real sigma_t exceeded the library's majorant (must stay 0).
@@ -85,6 +94,7 @@ private:
     std::shared_ptr<const LibraryField> field_;
     std::shared_ptr<PhaseFunction> phase_;
     double top_ = 0;
+    double core_start_ = 0, core_level_ = -INFINITY;  // opaque_core
     double exit_level_ = 0;  // find_exits
     std::string label_;
     mutable std::array<Tally, kTallySlots + 1> tallies_;

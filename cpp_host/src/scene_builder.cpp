@@ -915,6 +915,13 @@ private:
         for (const auto& b : macrofacet_boundaries_) superpose = superpose && !b.shape->exterior && !b.shape->exterior_bag;
         std::map<const Medium*, int> boundaries_of;
         for (const auto& b : macrofacet_boundaries_) ++boundaries_of[b.medium.get()];
+        // A sphere's shell has its opaque core, however its region is placed.
+        for (const auto& entry : boundaries_of) {
+            auto* m = dynamic_cast<const MacrofacetMedium*>(entry.first);
+            double start, core;
+            if (opts_.opaque_cores && m && m->surface().sphere() && m->opaque_core(&start, &core))
+                scene_->add_opaque_core(m->surface().sphere()->center, m->surface().sphere()->radius, start, core);
+        }
         for (const auto& b : macrofacet_boundaries_) {
             // (a medium with several boundaries, as Mitsuba allows, keeps them: its region is their union)
             auto sphere = std::dynamic_pointer_cast<const SphereShape>(b.shape);

@@ -32,6 +32,7 @@
 //  * determinism: bit-identical EXR for the same seed (1 and 2 threads).
 #include <macrofacet.h>
 
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -581,6 +582,43 @@ TEST_CASE(media_find_their_exits) {
     mean_difference(read_exr(work("exits_cast.exr")), read_exr(work("exits_found.exr")), &mean, &m, &se);
     CHECK_MSG(std::fabs(m) < 4.5 * se + 1e-4, "exits found - exits cast = " + std::to_string(m) + " (se " + std::to_string(se) + ")");
     std::printf("  exits: mean %.5f, found - cast = %+.5f (%.2f se)\n", mean, m, m / se);
+}
+
+// A thin shell's opaque core (mf_track_opaque_core, Scene::add_opaque_core) ends the shadow rays
+// that meet it from above its start level: the image is the one that tracks them
+// (--no-opaque-cores), to noise. The geometric test takes only such rays, and only where they
+// reach the core before their end.
+TEST_CASE(opaque_cores) {
+    const std::string xml = "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(3.0f, 40.0f, 24, 24, 64) +
+                            medium_xml("mf", R"(<float name="sigma" value="0.002"/><string name="distribution" value="beckmann"/><float name="alpha" value="0.3"/><string name="material" value="Au"/>)") +
+                            R"(<shape type="sphere"><ref name="interior" id="mf"/></shape>
+        <shape type="rectangle"><transform name="to_world"><scale value="3"/><translate z="-1.2"/></transform>
+          <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+        <emitter type="constant"><rgb name="radiance" value="1"/></emitter></scene>)";
+    write_file(work("cores.xml"), xml);
+    for (bool cores : {true, false}) {
+        BuildOptions o;
+        o.opaque_cores = cores;
+        auto scene = build_scene(parse_scene_string(xml, work("cores.xml"), {}), o, nullptr);
+        const MacrofacetMedium* m = first_macrofacet(*scene);
+        double start = 0, core = 0;
+        CHECK(m && m->opaque_core(&start, &core));
+        CHECK_MSG(start == -8 * 0.002 && core < -30 * 0.002 && core > -50 * 0.002, "core " + std::to_string(core));
+        const float above = 1.0f + float(start) + 1e-4f, inf = std::numeric_limits<float>::infinity();
+        CHECK(scene->blocked_by_opaque_core(Vec3(0, 0, above), Vec3(0, 0, -1), inf) == cores);
+        CHECK(scene->blocked_by_opaque_core(Vec3(0, 0, 2), Vec3(0, 0, -1), inf) == cores);        // from outside the shell
+        CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, above), Vec3(0, 0, 1), inf));            // outward
+        CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, above), Vec3(1, 0, 0), inf));            // above the core all along
+        CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, above), Vec3(0, 0, -1), float(-0.5 * core)));  // ends before it
+        CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, 1.0f + 1.5f * float(start)), Vec3(0, 0, -1), inf));  // below the start level
+        CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, 0.5f), Vec3(0, 0, -1), inf));           // inside the core
+    }
+    CHECK(run({work("cores.xml"), "-o", work("cores_on.exr"), "--quiet", "--seed", "1"}) == 0);
+    CHECK(run({work("cores.xml"), "-o", work("cores_off.exr"), "--quiet", "--seed", "2", "--no-opaque-cores"}) == 0);
+    double mean, m, se;
+    mean_difference(read_exr(work("cores_off.exr")), read_exr(work("cores_on.exr")), &mean, &m, &se);
+    CHECK_MSG(std::fabs(m) < 4.5 * se + 1e-4, "cores - tracked = " + std::to_string(m) + " (se " + std::to_string(se) + ")");
+    std::printf("  opaque cores: mean %.5f, cores - tracked = %+.5f (%.2f se)\n", mean, m, m / se);
 }
 
 TEST_CASE(determinism) {

@@ -1212,6 +1212,43 @@ static int32_t nan_bound(void *user_data, const mf_surface_point *start, mf_vec3
 /* Surfaces (built in and host callbacks) and the tracking calls: equal answers for equal inputs
  * and seeds, outputs within their ranges, the combined phase call, batches, and bad input —
  * including a misbehaving host surface, reported at its first bad answer. */
+/* mf_track_opaque_core: a shadow ray from the shell into a sphere's core has a transmittance that
+   rounds to 0; a mesh's core is never shallower; NULLs change nothing. */
+static void test_opaque_core(void) {
+  const named_float f[] = {{"sigma", 1e-3}, {"alpha", 0.3}, {NULL, 0}};
+  mf_medium *m = build(f, (const char *[]){"distribution", "beckmann", "material", "Au", NULL}, NULL, NULL, NULL, NULL);
+  mf_surface *sphere = NULL, *mesh = NULL;
+  EXPECT_OK(mf_surface_new_sphere(v3(0, 0, 0), 1.0, false, v3(0, 0, 1), &sphere));
+  const double octa_p[18] = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
+  const uint32_t octa_i[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  mf_mesh octa = {octa_p, 6, octa_i, 8, NULL, NULL};
+  EXPECT_OK(mf_surface_new_mesh(&octa, &mesh));
+  double start = 1, core = 1;
+  EXPECT_OK(mf_track_opaque_core(m, sphere, &start, &core));
+  /* start at -8 sigma; the core about 40 sigma deep (kappa ~ 1 for a sphere's gradient frame) */
+  CHECK(start == -8e-3 && core < -0.035 && core > -0.045, "sphere core: start %g, core %g", start, core);
+  for (uint64_t seed = 0; seed < 32; ++seed) {
+    /* from the start level, 30 degrees below the tangent plane: the ray reaches f = -0.134 */
+    const double r = 1 + start;
+    mf_track_query in = {v3(0, 0, r), normalize(v3(sqrt(3.0), 0, -1)), INFINITY, seed, 0};
+    mf_transmittance t;
+    EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &in, &t));
+    CHECK(t.transmittance == 0, "a ray into the core must be opaque (seed %llu: %g)", (unsigned long long)seed, t.transmittance);
+  }
+  double mesh_start = 1, mesh_core = 1;
+  EXPECT_OK(mf_track_opaque_core(m, mesh, &mesh_start, &mesh_core));
+  CHECK(mesh_start == start && mesh_core <= core, "mesh core %g above the sphere's %g", mesh_core, core);
+  double keep_start = 7, keep_core = 7;
+  EXPECT_STATUS(mf_track_opaque_core(NULL, sphere, &keep_start, &keep_core), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_track_opaque_core(m, NULL, &keep_start, &keep_core), MF_ERROR_NULL_POINTER, "surface");
+  EXPECT_STATUS(mf_track_opaque_core(m, sphere, NULL, &keep_core), MF_ERROR_NULL_POINTER, "out_start_level");
+  EXPECT_STATUS(mf_track_opaque_core(m, sphere, &keep_start, NULL), MF_ERROR_NULL_POINTER, "out_core_level");
+  CHECK(keep_start == 7 && keep_core == 7, "mf_track_opaque_core wrote an out-parameter on failure");
+  mf_surface_free(mesh);
+  mf_surface_free(sphere);
+  mf_medium_free(m);
+}
+
 static void test_surfaces_and_tracking(void) {
   mf_medium *m = gpss_conductor();
   mf_surface *sphere = NULL, *callbacks = NULL, *mesh = NULL;
@@ -1917,6 +1954,7 @@ int main(void) {
   test_bad_query_arguments();
   test_gpis();
   test_surfaces_and_tracking();
+  test_opaque_core();
   test_fields();
   test_gpis_fields();
   test_ndf();

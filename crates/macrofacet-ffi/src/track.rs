@@ -17,6 +17,7 @@ use macrofacet::frame::{not_a_direction, unit_direction};
 use macrofacet::medium::MacrofacetMedium;
 use macrofacet::rng::Pcg32;
 use macrofacet::field::{Constant, MediumField};
+use macrofacet::opaque_core::{OpaqueCore, START_SIGMAS as OPAQUE_START_SIGMAS};
 use macrofacet::surface::MeanSurface;
 use macrofacet::tracking::{ProjectedAreaBounds, TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
 use glam::DVec3;
@@ -322,4 +323,39 @@ pub unsafe extern "C" fn mf_track_transmittance_batch(
 ) -> mf_status {
     let blank = mf_transmittance { transmittance: 0.0, t: 0.0, stats: TrackStats::default().into() };
     track_batch(medium, surface, field, user_data, queries, count, out_transmittances, blank, transmittance)
+}
+
+/// The opaque core of `medium` about `surface` (stationary parameters; see the Rust crate's
+/// `opaque_core` module for the bound): a ray from a point with `f >= *out_start_level` that
+/// reaches `f <= *out_core_level` has a transmittance below `e^-750`, so small that its estimate
+/// rounds to 0 in double precision. A host may treat the region `f <= core_level` as opaque for
+/// such rays, e.g. skip a shadow ray from a collision (its `f` at least `start_level`) that meets
+/// a sphere's core, before the phase evaluation and the tracking call. `*out_start_level` is
+/// `−8σ`; `*out_core_level` is `−INFINITY` when the bound gives no core (a projected area
+/// without a positive lower bound over the directions a descending ray takes: on a mesh, whose
+/// frame normals are not the distance's gradient, over every direction). A medium with a field
+/// (`mf_track_*`'s `field`) varies in space: the levels do not hold for it.
+///
+/// # Safety
+/// Pointers must be NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mf_track_opaque_core(medium: *const mf_medium, surface: *const mf_surface, out_start_level: *mut f64, out_core_level: *mut f64) -> mf_status {
+    struct Core<'a>(&'a mf_medium);
+    impl SurfaceVisitor for Core<'_> {
+        type Output = Option<OpaqueCore>;
+        fn visit<S: MeanSurface>(self, surface: &S) -> Option<OpaqueCore> {
+            Tracker::with_bounds(&self.0.inner, &self.0.bounds, surface, &Constant).opaque_core()
+        }
+    }
+    boundary(|| {
+        let (m, s) = (arg(medium, "medium")?, arg(surface, "surface")?);
+        let (start, core) = (out(out_start_level, "out_start_level")?, out(out_core_level, "out_core_level")?);
+        // (No callback is called: only the surface's Lipschitz constant and kind are read.)
+        let found = with_surface(s, std::ptr::null_mut(), Core(m));
+        (*start, *core) = match found {
+            Some(c) => (c.start_level, c.core_level),
+            None => (-OPAQUE_START_SIGMAS * m.inner.height.sigma, f64::NEG_INFINITY),
+        };
+        Ok(())
+    })
 }

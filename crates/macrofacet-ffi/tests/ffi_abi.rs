@@ -540,6 +540,11 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
         // The rays exercise both outcomes and fractional transmittances (the test can fail).
         assert!(scattered > 30 && scattered < 270, "{name}: {scattered} of 300 scattered");
         assert!(partial > 10, "{name}: only {partial} fractional transmittances");
+        // mf_track_opaque_core: the core's levels (−∞ where it has none).
+        let (mut start, mut level) = (0.0, 0.0);
+        assert_eq!(unsafe { mf_track_opaque_core(medium, handle, &mut start, &mut level) }, mf_status::MF_OK, "{name}");
+        let expected = tracker.opaque_core().map_or((-8.0 * core.height.sigma, f64::NEG_INFINITY), |c| (c.start_level, c.core_level));
+        assert_eq!((start.to_bits(), level.to_bits()), (expected.0.to_bits(), expected.1.to_bits()), "{name}: opaque core");
     }
 
     let mut rng = Rng(777);

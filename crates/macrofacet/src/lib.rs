@@ -35,6 +35,7 @@ pub mod height;
 pub mod limits;
 pub mod medium;
 pub mod ndf;
+pub mod opaque_core;
 pub mod params;
 pub mod phase;
 pub mod rng;

@@ -1188,3 +1188,75 @@ fn bounds_built_once_track_as_the_trackers_own() {
     let p = ks_two_sample(&mut fresh_runs.0, &mut shared_runs.0);
     assert!(p > 1e-3, "free-flight distances differ: KS p = {p} ({fresh_n} and {shared_n} collisions)");
 }
+
+/// `τ` from `o` to `o + t_end d` by Gauss–Legendre panels of `σ/20` of the tracker's exact `σ_t`.
+fn optical_depth_to<S: MeanSurface>(tracker: &Tracker<S>, surface: &S, sigma: f64, o: DVec3, d: DVec3, t_end: f64) -> f64 {
+    let panels = (t_end / (sigma / 20.0)).ceil() as usize;
+    let h = t_end / panels as f64;
+    let nodes = common::gauss_legendre(4);
+    (0..panels)
+        .map(|i| {
+            let t = i as f64 * h;
+            nodes.iter().map(|&(x, w)| {
+                let p = o + (t + 0.5 * h * (1.0 + x)) * d;
+                0.5 * h * w * tracker.sigma_t_at(p, &surface.point(p).unwrap(), d).unwrap().0
+            }).sum::<f64>()
+        })
+        .sum()
+}
+
+/// The opaque core (`macrofacet::opaque_core`): from the start level and from above the shell, at
+/// angles from the radial ray down to rays that barely reach the core, the exact optical depth
+/// to the core's first point is at least `OPAQUE_DEPTH` (the radial ray's little more: the
+/// bound is tight there), and every transmittance estimate is 0. A mesh's core (its frame normals
+/// are not the gradient) is never shallower; a varying field has none.
+#[test]
+fn an_opaque_core_is_opaque() {
+    use macrofacet::opaque_core::{OPAQUE_DEPTH, START_SIGMAS};
+    let sphere = Sphere::new(DVec3::ZERO, 1.0, false, DVec3::Z).unwrap();
+    let octahedron = TriangleMesh::new(
+        &[DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z],
+        &[[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]],
+        None,
+        None::<&[DVec2]>,
+    )
+    .unwrap();
+    let media = [
+        ("thin Beckmann", medium(Ndf::Beckmann(Beckmann { alpha_u: 0.3, alpha_v: 0.3 }), 1e-3)),
+        ("thin anisotropic Beckmann", medium(Ndf::Beckmann(Beckmann { alpha_u: 0.05, alpha_v: 0.4 }), 1e-3)),
+        ("thin GGX", medium(Ndf::Ggx(macrofacet::ndf::Ggx::new(0.1, 0.1).unwrap()), 1e-3)),
+        ("fuzzy gpss", medium(Ndf::Gpss(Gpss { alpha_x: 0.5, alpha_y: 0.5, alpha_z: 0.5 }), 0.02)),
+    ];
+    for (label, m) in &media {
+        let tracker = Tracker::new(m, &sphere);
+        let core = tracker.opaque_core().unwrap();
+        let sigma = m.height.sigma;
+        assert_eq!(core.start_level, -START_SIGMAS * sigma);
+        let r_core = 1.0 + core.core_level;
+        assert!(r_core > 0.0 && core.core_level < -30.0 * sigma, "{label}: core at {}", core.core_level);
+        for f0 in [core.start_level, m.height.top()] {
+            let r0 = 1.0 + f0;
+            let grazing = (r_core / r0).acos();
+            for k in 1..=4 {
+                let beta = grazing + k as f64 * (0.5 * std::f64::consts::PI - grazing) / 4.0;
+                let (o, d) = (DVec3::new(0.0, 0.0, r0), DVec3::new(beta.cos(), 0.0, -beta.sin()));
+                let b = o.dot(d);
+                let t_core = -b - (b * b - (r0 * r0 - r_core * r_core)).sqrt();
+                let tau = optical_depth_to(&tracker, &sphere, sigma, o, d, t_core);
+                assert!(tau >= OPAQUE_DEPTH * (1.0 - 1e-6), "{label}: from f = {f0}, {beta} below the tangent: tau = {tau}");
+                if k == 4 && f0 == core.start_level {
+                    assert!(tau <= 1.1 * OPAQUE_DEPTH, "{label}: the radial ray's depth {tau} (the bound is loose)");
+                }
+                for seed in 0..16 {
+                    let t = tracker.transmittance(o, d, f64::INFINITY, &mut Pcg32::new(seed, 7), &mut TrackStats::default()).unwrap();
+                    assert_eq!(t, 0.0, "{label}: seed {seed}, {beta} below the tangent");
+                }
+            }
+        }
+        if let Some(mesh_core) = Tracker::new(m, &octahedron).opaque_core() {
+            assert!(mesh_core.core_level <= core.core_level, "{label}: the mesh's core {mesh_core:?} above the sphere's {core:?}");
+        }
+        let field = TestField { sigma: [0.5 * sigma, sigma], alpha: [0.3, 0.3], anisotropy: None, understate: false };
+        assert_eq!(Tracker::with_field(m, &sphere, &field).opaque_core(), None, "{label}: a varying field");
+    }
+}

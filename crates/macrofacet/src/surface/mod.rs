@@ -270,6 +270,12 @@ pub trait MeanSurface {
         1.0
     }
 
+    /// True when every point's frame normal is the direction of `∇f`: where a ray descends, `d·n`
+    /// is then negative ([`crate::opaque_core`]). A mesh's vertex normals are not.
+    fn normal_is_gradient(&self) -> bool {
+        false
+    }
+
     /// A lower bound of `|f(p)|`, cheaper than [`Self::point`] (0 when unknown): lets the
     /// tracker cross empty space above the shell without exact queries.
     fn distance_bound(&self, _p: DVec3) -> f64 {
@@ -280,6 +286,14 @@ pub trait MeanSurface {
     /// is a signed distance, the box grown by `top` contains the medium's region `f < top`.
     /// [`Aabb::EVERYTHING`] when the interior is unbounded.
     fn bounding_box(&self) -> Aabb;
+
+    /// The part of `[0, t_max]` (`t_max` at most `f64::MAX`) of the ray `o + t d` (`d` unit)
+    /// inside a region that contains every point with `f <= reach` (`reach >= 0`), or `None`
+    /// where the ray misses it: [`Self::bounding_box`] grown by `reach` unless the surface knows
+    /// a tighter region that is as cheap to clip.
+    fn clip_region(&self, o: DVec3, d: DVec3, t_max: f64, reach: f64) -> Option<(f64, f64)> {
+        self.bounding_box().grown(reach * (1.0 + 1e-9)).clip(o, d, 0.0, t_max)
+    }
 
     /// An enclosure of `f < level` tighter than the grid's of [`enclosure`], when the surface
     /// can build one and prove it conservative (a mesh: its own faces moved out, `mesh/offset.rs`);

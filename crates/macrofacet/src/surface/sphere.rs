@@ -178,8 +178,35 @@ impl MeanSurface for Sphere {
         true
     }
 
+    fn normal_is_gradient(&self) -> bool {
+        true
+    }
+
     fn distance_bound(&self, p: DVec3) -> f64 {
         self.distance(p).1.abs()
+    }
+
+    /// The chord of the sphere of radius `R = r + 2 reach`, grown by 1e-9 of it (the rounding of
+    /// `f` and of the chord, ~1e-16 |o − c|² in `R²`). Twice the reach: a segment that leaves the
+    /// shell then ends above its top, where the optical depth's closed form is a constant, not
+    /// ~250 instructions. From beyond 1e3 radii, where `|o − c|² − R²` cancels, where `1e6 R²`
+    /// overflows, and around a flipped sphere (its region is unbounded), the box. (Cheaper than
+    /// the box's three divisions.)
+    fn clip_region(&self, o: DVec3, d: DVec3, t_max: f64, reach: f64) -> Option<(f64, f64)> {
+        let radius = (self.radius + 2.0 * reach) * (1.0 + 1e-9);
+        let oc = o - self.center;
+        let (oo, limit) = (oc.length_squared(), 1e6 * radius * radius);
+        if self.flip_normals || !(limit.is_finite() && oo <= limit) {
+            return self.bounding_box().grown(reach * (1.0 + 1e-9)).clip(o, d, 0.0, t_max);
+        }
+        let b = oc.dot(d);
+        let disc = b * b - (oo - radius * radius);
+        if !(disc >= 0.0) {
+            return None;
+        }
+        let root = disc.sqrt();
+        let (lo, hi) = ((-b - root).max(0.0), (-b + root).min(t_max));
+        (lo <= hi).then_some((lo, hi))
     }
 
     fn bounding_box(&self) -> Aabb {

@@ -158,6 +158,8 @@ pub struct ProjectedAreaBounds {
     lipschitz: f64,
     /// The distribution they bound.
     source: Ndf,
+    /// Whether `source` is isotropic (the tracker's per-call question, answered once).
+    isotropic: bool,
     /// Cell `k` holds the bounds over `d·n ∈ [−1 + k h − η, −1 + (k + 1) h + η]`, `h = 2 /`
     /// [`AREA_CELLS`], `η` = [`CELL_OVERLAP`] (none for per-call bounds): level 0 of a sparse
     /// table whose level `j` holds, at `k`, the extremes of cells `k..k + 2^j` (where they exist),
@@ -266,7 +268,7 @@ impl ProjectedAreaBounds {
     /// Without cells: for bounds built per call or per segment.
     fn new(ndf: &Ndf) -> Self {
         let (upper, lower) = ndf.isotropic_envelope();
-        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf, cells: None }
+        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf, isotropic: ndf.is_isotropic(), cells: None }
     }
 
     /// The cells' bound of `side` over `cos` when every cell it meets is tight. A range within
@@ -469,14 +471,16 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     fn assemble(medium: &'a MacrofacetMedium, area: Area<'a>, surface: &'a S, field: &'a F) -> Self {
         let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
-        Tracker { medium, surface, field, area, isotropic: medium.phase.ndf.is_isotropic(), region, complete_uv: true }
+        // (The area's distribution is the medium's: `with_bounds` checks it.)
+        Tracker { medium, surface, field, isotropic: area.get().isotropic, area, region, complete_uv: true }
     }
 
     /// A tracker whose collisions keep the uv the tracker's queries gave (possibly none) instead
     /// of completing it ([`MeanSurface::uv`]): for callers that do not read it, such as the C
     /// ABI, whose collisions carry no uv (a sphere's costs an `atan2` and an `acos`).
-    pub fn without_uv(self) -> Self {
-        Tracker { complete_uv: false, ..self }
+    pub fn without_uv(mut self) -> Self {
+        self.complete_uv = false;
+        self
     }
 
     fn height(&self) -> &HeightProfile {

@@ -244,6 +244,32 @@ impl Scene<'_> {
     }
 
     /// NULL arguments: each refused with nothing written.
+    /// `mf_track_opaque_core`: levels below the shell (or a core of `−∞`); where the host is
+    /// honest and no field varies, a query from `f >= start` that reaches `f <= core` (found by
+    /// points along the ray) has transmittance estimates of exactly 0 up to that point.
+    pub fn opaque_core(&mut self, q: &mf_track_query) {
+        let (m, s) = (self.medium.0 as *const mf_medium, self.surface.0 as *const mf_surface);
+        let (mut start, mut core) = (0.0, 0.0);
+        // SAFETY: live handles, valid out-pointers.
+        assert_eq!(unsafe { mf_track_opaque_core(m, s, &mut start, &mut core) }, mf_status::MF_OK, "{}", check::last_error());
+        assert!(start < 0.0 && start.is_finite() && (core < start || core == f64::NEG_INFINITY), "opaque core: start {start}, core {core}");
+        if !(core.is_finite() && self.field.is_none() && self.host.honest() && self.host.deterministic()) {
+            return;
+        }
+        let (o, d) = (dvec3(q.origin), dvec3(q.d));
+        if !o.is_finite() || (d.length() - 1.0).abs() > 1e-6 || !self.eval(o).is_some_and(|p| p.f >= start) {
+            return;
+        }
+        let reach = q.t_max.min(4.0 * self.size);
+        let Some(t) = (1..=32).map(|i| reach * i as f64 / 32.0).find(|&t| self.eval(o + t * d).is_some_and(|p| p.f <= core)) else { return };
+        for seed in 0..4 {
+            let into = mf_track_query { t_max: t, seed: q.seed ^ seed, exit_level: 0.0, ..*q };
+            if let Some(tr) = self.transmittance(&into) {
+                assert_eq!(tr.transmittance, 0.0, "a ray from f >= {start} into the opaque core (f <= {core} at t = {t}): {into:?}");
+            }
+        }
+    }
+
     pub fn nulls(&mut self, q: &mf_track_query) {
         let (m, s, f) = (self.medium.0 as *const mf_medium, self.surface.0 as *const mf_surface, self.field_ptr());
         let u = self.host.user_data();

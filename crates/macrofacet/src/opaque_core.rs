@@ -7,11 +7,13 @@
 //! to `f_core` descends through every level between them at least once, so if `σ(d) ds >= κ |df|`
 //! wherever it descends, `τ >= κ ∫_{f_core}^{f_start} ρ(f) df = κ [ln Φ(f_start/σ) − ln Φ(f_core/σ)]`
 //! (`ln Φ(f/σ)` is an antiderivative of Eq. 13's `ρ`; `f_start` lies below the top face, where
-//! `ρ` is not cut). With `f` `L`-Lipschitz, `|df| <= L |∇f/L| ds`:
-//! - where the frame normal is the direction of `∇f` (a sphere), `df/ds = |∇f| (d·n)` with
-//!   `d·n < 0`, so `κ = min σ(d)/(L |d·n|)` over `d·n ∈ [−1, 0)`, about `1/L` (a projected area
-//!   is at least `|d·n|` for a normalised distribution, `E[max(0, w·g)] >= w·E[g]`);
-//! - otherwise (a mesh's vertex normals), `κ = min σ(d) / L` over every direction.
+//! `ρ` is not cut). With `f` `L`-Lipschitz (`|∇f| <= L`):
+//! - where the frame normal `n` is the direction of `∇f` (a sphere), `|df/ds| = |∇f| |d·n| <=
+//!   L |d·n|` with `d·n < 0` where the ray descends, so `κ = min σ(d)/(L |d·n|)` over
+//!   `d·n ∈ [−1, 0)`: about `1/L`, as a normalised distribution's projected area is at least
+//!   `|d·n|` (`E[max(0, w·g)] >= w·E[g]`);
+//! - otherwise (a mesh's vertex normals), `|df/ds| <= L`, and `κ = min σ(d)/L` over every
+//!   direction.
 //!
 //! The core is where `τ` reaches [`OPAQUE_DEPTH`].
 

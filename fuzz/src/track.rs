@@ -246,7 +246,8 @@ impl Scene<'_> {
     /// NULL arguments: each refused with nothing written.
     /// `mf_track_opaque_core`: levels below the shell (or a core of `−∞`); where the host is
     /// honest and no field varies, a query from `f >= start` that reaches `f <= core` (found by
-    /// points along the ray) has transmittance estimates of exactly 0 up to that point.
+    /// points along the ray, by a margin far above the rounding of their coordinates) has
+    /// transmittance estimates of exactly 0 up to that point.
     pub fn opaque_core(&mut self, q: &mf_track_query) {
         let (m, s) = (self.medium.0 as *const mf_medium, self.surface.0 as *const mf_surface);
         let (mut start, mut core) = (0.0, 0.0);
@@ -260,8 +261,14 @@ impl Scene<'_> {
         if !o.is_finite() || (d.length() - 1.0).abs() > 1e-6 || !self.eval(o).is_some_and(|p| p.f >= start) {
             return;
         }
+        // The library tracks along d renormalised (found by fuzzing: d of length 1 + 1e-6 put
+        // the point at t = 1e-3 a hair inside a flipped sphere of radius 1e-3, σ = 1e-50, while
+        // the tracked ray ended on its surface). Below the core by 1e-9 of the coordinates: far
+        // beyond where rounding puts the tracker's points.
+        let d = d.normalize();
         let reach = q.t_max.min(4.0 * self.size);
-        let Some(t) = (1..=32).map(|i| reach * i as f64 / 32.0).find(|&t| self.eval(o + t * d).is_some_and(|p| p.f <= core)) else { return };
+        let deep = |f: f64, p: DVec3, t: f64| f <= core - 1e-9 * (p.abs().max_element() + t);
+        let Some(t) = (1..=32).map(|i| reach * i as f64 / 32.0).find(|&t| self.eval(o + t * d).is_some_and(|p| deep(p.f, o + t * d, t))) else { return };
         for seed in 0..4 {
             let into = mf_track_query { t_max: t, seed: q.seed ^ seed, exit_level: 0.0, ..*q };
             if let Some(tr) = self.transmittance(&into) {

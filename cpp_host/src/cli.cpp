@@ -17,7 +17,6 @@
 
 #include "image_io.h"
 #include "field.h"
-#include "mean_surface.h"
 #include "medium_macrofacet.h"
 #include "render.h"
 #include "scene_builder.h"
@@ -318,7 +317,7 @@ int mfrender_main(int argc, char** argv) {
                     std::printf("  %s: finds its rays' exits from the region itself (--cast-exits: a ray cast each)\n",
                                 mm->label().c_str());
                 double start, core;
-                if (bopts.opaque_cores && mm->surface().sphere() && mm->opaque_core(&start, &core) && mm->surface().sphere()->radius + core > 0)
+                if (bopts.opaque_cores && mm->sphere_core(&start, &core))
                     std::printf("  %s: shadow rays from f >= %g end at its opaque core, f <= %g (--no-opaque-cores: tracked)\n",
                                 mm->label().c_str(), start, core);
             }

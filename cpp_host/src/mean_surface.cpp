@@ -64,10 +64,7 @@ std::shared_ptr<const MeanSurface> MeanSurface::of(const Shape& shape) {
     if (st != MF_OK)
         throw Error(shape.loc, "<shape type=\"" + shape.kind() + "\">: not a valid mean surface: " + library_error());
     auto surface = std::shared_ptr<MeanSurface>(new MeanSurface(handle));
-    if (sphere && !sphere->flipped()) {
-        surface->sphere_ = Sphere{sphere->center(), sphere->radius()};
-        surface->is_sphere_ = true;
-    }
+    if (sphere && !sphere->flipped()) surface->sphere_ = Sphere{sphere->center(), sphere->radius()};
     return surface;
 }
 

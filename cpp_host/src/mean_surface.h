@@ -17,6 +17,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 
 #include "math.h"
 
@@ -47,13 +48,12 @@ public:
         double radius;
     };
     /// The sphere this surface is, or null (a mesh, a grid, a flipped sphere).
-    const Sphere* sphere() const { return is_sphere_ ? &sphere_ : nullptr; }
+    const Sphere* sphere() const { return sphere_ ? &*sphere_ : nullptr; }
 
 private:
     explicit MeanSurface(mf_surface* handle) : handle_(handle) {}
     mf_surface* handle_;
-    Sphere sphere_{};
-    bool is_sphere_ = false;
+    std::optional<Sphere> sphere_;
 };
 
 /// The boundary of the region f < level of `mean` as a null-BSDF shape whose interior is

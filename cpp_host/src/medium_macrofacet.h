@@ -15,6 +15,7 @@
 #include <memory>
 #include <string>
 
+#include "mean_surface.h"
 #include "medium.h"
 
 struct mf_medium;
@@ -24,7 +25,6 @@ struct mf_track_stats;
 namespace mf {
 
 class LibraryField;
-class MeanSurface;
 
 /// Cumulative tracking counts of one medium (for benchmarks and tests).
 struct TrackCounts {
@@ -66,6 +66,12 @@ public:
         *start_level = core_start_;
         *core_level = core_level_;
         return std::isfinite(core_level_);
+    }
+    /// The sphere whose core mfrender tests shadow rays against (Scene::add_opaque_core), with
+    /// the levels: when the mean surface is a sphere and the core lies inside it.
+    const MeanSurface::Sphere* sphere_core(double* start_level, double* core_level) const {
+        const MeanSurface::Sphere* s = surface_->sphere();
+        return s && opaque_core(start_level, core_level) && s->radius + *core_level > 0 ? s : nullptr;
     }
     /// The real sigma_t at p for direction d, with the surface's frame and signed distance there.
     double sigma_t_at(const Vec3& p, const Vec3& d, Vec3* normal, Vec3* tangent, float* f) const;

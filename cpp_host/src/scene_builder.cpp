@@ -919,8 +919,8 @@ private:
         for (const auto& entry : boundaries_of) {
             auto* m = dynamic_cast<const MacrofacetMedium*>(entry.first);
             double start, core;
-            if (opts_.opaque_cores && m && m->surface().sphere() && m->opaque_core(&start, &core))
-                scene_->add_opaque_core(m->surface().sphere()->center, m->surface().sphere()->radius, start, core);
+            if (!opts_.opaque_cores || !m) continue;
+            if (const MeanSurface::Sphere* s = m->sphere_core(&start, &core)) scene_->add_opaque_core(s->center, s->radius, start, core);
         }
         for (const auto& b : macrofacet_boundaries_) {
             // (a medium with several boundaries, as Mitsuba allows, keeps them: its region is their union)

@@ -17,7 +17,7 @@ use macrofacet::frame::{not_a_direction, unit_direction};
 use macrofacet::medium::MacrofacetMedium;
 use macrofacet::rng::Pcg32;
 use macrofacet::field::{Constant, MediumField};
-use macrofacet::opaque_core::{OpaqueCore, START_SIGMAS as OPAQUE_START_SIGMAS};
+use macrofacet::opaque_core::{start_level, OpaqueCore};
 use macrofacet::surface::MeanSurface;
 use macrofacet::tracking::{ProjectedAreaBounds, TrackStats, TrackedFlight, Tracker, TRACK_STREAM};
 use glam::DVec3;
@@ -354,7 +354,7 @@ pub unsafe extern "C" fn mf_track_opaque_core(medium: *const mf_medium, surface:
         let found = with_surface(s, std::ptr::null_mut(), Core(m));
         (*start, *core) = match found {
             Some(c) => (c.start_level, c.core_level),
-            None => (-OPAQUE_START_SIGMAS * m.inner.height.sigma, f64::NEG_INFINITY),
+            None => (start_level(&m.inner.height), f64::NEG_INFINITY),
         };
         Ok(())
     })

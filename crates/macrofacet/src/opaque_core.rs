@@ -37,6 +37,11 @@ pub struct OpaqueCore {
     pub core_level: f64,
 }
 
+/// `f_start` of a shell with heights `height`: `−`[`START_SIGMAS`]` σ`.
+pub fn start_level(height: &HeightProfile) -> f64 {
+    -START_SIGMAS * height.sigma
+}
+
 /// The opaque core of a stationary shell with heights `height` along whose descending rays
 /// `σ(d) ds >= kappa |df|` (the module's `κ`). `None` when that gives none (`kappa` not positive,
 /// or a core beyond `f64`'s range).
@@ -55,7 +60,7 @@ pub fn opaque_core(height: &HeightProfile, kappa: f64) -> Option<OpaqueCore> {
     for _ in 0..8 {
         if ln_normal_cdf(x) <= target {
             let core_level = x * sigma;
-            return core_level.is_finite().then_some(OpaqueCore { start_level: start * sigma, core_level });
+            return core_level.is_finite().then_some(OpaqueCore { start_level: start_level(height), core_level });
         }
         x *= 1.0 + 1e-12;
     }

@@ -172,6 +172,12 @@ impl Aabb {
         Aabb { min: self.min - DVec3::splat(by), max: self.max + DVec3::splat(by) }
     }
 
+    /// [`MeanSurface::clip_region`] of a surface whose box (of `f <= 0`) this is: the box grown
+    /// by `reach` (and 1e-9 of it, for the rounding of `f`).
+    pub fn clip_region(&self, o: DVec3, d: DVec3, t_max: f64, reach: f64) -> Option<(f64, f64)> {
+        self.grown(reach * (1.0 + 1e-9)).clip(o, d, 0.0, t_max)
+    }
+
     /// The parameter interval of `o + t d` inside the box, clipped to `[t0, t1]`; `None` when
     /// the ray misses it.
     pub fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
@@ -292,7 +298,7 @@ pub trait MeanSurface {
     /// where the ray misses it: [`Self::bounding_box`] grown by `reach` unless the surface knows
     /// a tighter region that is as cheap to clip.
     fn clip_region(&self, o: DVec3, d: DVec3, t_max: f64, reach: f64) -> Option<(f64, f64)> {
-        self.bounding_box().grown(reach * (1.0 + 1e-9)).clip(o, d, 0.0, t_max)
+        self.bounding_box().clip_region(o, d, t_max, reach)
     }
 
     /// An enclosure of `f < level` tighter than the grid's of [`enclosure`], when the surface

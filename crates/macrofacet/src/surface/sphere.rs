@@ -197,7 +197,7 @@ impl MeanSurface for Sphere {
         let oc = o - self.center;
         let (oo, limit) = (oc.length_squared(), 1e6 * radius * radius);
         if self.flip_normals || !(limit.is_finite() && oo <= limit) {
-            return self.bounding_box().grown(reach * (1.0 + 1e-9)).clip(o, d, 0.0, t_max);
+            return self.bounding_box().clip_region(o, d, t_max, reach);
         }
         let b = oc.dot(d);
         let disc = b * b - (oo - radius * radius);

@@ -174,6 +174,7 @@ impl Aabb {
 
     /// [`MeanSurface::clip_region`] of a surface whose box (of `f <= 0`) this is: the box grown
     /// by `reach` (and 1e-9 of it, for the rounding of `f`).
+    #[inline]
     pub fn clip_region(&self, o: DVec3, d: DVec3, t_max: f64, reach: f64) -> Option<(f64, f64)> {
         self.grown(reach * (1.0 + 1e-9)).clip(o, d, 0.0, t_max)
     }

@@ -30,6 +30,16 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
         // A medium that finds the exit itself is cast against the shapes near it only (see Li)
         const bool to_exit = vol && medium && medium->finds_exits();
         bool hit = to_exit ? scene_.intersect_near(medium->near_scene(), r, &h) : scene_.intersect(r, &h);
+        // Mitsuba's volpath sees through a mask with its transparency (eval_null_transmission);
+        // its path tests visibility, which any surface blocks (the mask's null events are Dirac
+        // then: emitters reached through it count fully, see Li). A surface that passes nothing
+        // ends the ray before any medium is tracked to it: the media's estimates would be
+        // multiplied by 0 (on the thin sphere anchor a third of the tracked shadow rays).
+        float pass = 1.0f;
+        if (hit && !h.shape->bsdf->is_null()) {
+            pass = vol ? h.shape->bsdf->transparency(h.texture_point()) : 0.0f;
+            if (!(pass > 0)) return Rgb(0.0f);
+        }
         float seg = hit ? h.t : dist;
         if (vol) {
             bool exited = false;
@@ -54,14 +64,7 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
             }
         }
         if (!hit) return T;
-        if (!h.shape->bsdf->is_null()) {
-            // Mitsuba's volpath sees through a mask with its transparency (eval_null_transmission);
-            // its path tests visibility, which any surface blocks (the mask's null events are
-            // Dirac then: emitters reached through it count fully, see Li)
-            const float pass = vol ? h.shape->bsdf->transparency(h.texture_point()) : 0.0f;
-            if (!(pass > 0)) return Rgb(0.0f);
-            T *= pass;
-        }
+        T *= pass;
         if (h.shape->is_medium_transition()) medium = h.shape->target_medium(h.ng, d);
         o = offset_ray_origin(h.p, h.ng, d);
         if (std::isfinite(dist)) {

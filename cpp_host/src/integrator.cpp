@@ -20,8 +20,9 @@ struct EventRecords {
 thread_local EventRecords event_records;
 }  // namespace
 
+template <class Unblocked>
 Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium,
-                                         Sampler& sampler) const {
+                                         Sampler& sampler, Unblocked&& unblocked) const {
     const bool vol = scene_.integrator.volumetric;
     Rgb T(1.0f);
     for (int i = 0; i < kMaxNullCrossings; ++i) {
@@ -40,6 +41,7 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
             pass = vol ? h.shape->bsdf->transparency(h.texture_point()) : 0.0f;
             if (!(pass > 0)) return Rgb(0.0f);
         }
+        if (i == 0 && !unblocked()) return Rgb(0.0f);
         float seg = hit ? h.t : dist;
         if (vol) {
             bool exited = false;
@@ -73,6 +75,11 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
         }
     }
     return Rgb(0.0f);
+}
+
+Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium,
+                                         Sampler& sampler) const {
+    return shadow_transmittance(o, d, dist, medium, sampler, [] { return true; });
 }
 
 Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
@@ -128,10 +135,15 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         // A shell's opaque core ends the shadow ray with a transmittance that rounds to 0: no
         // value, no tracking (a collision's light from inside the sphere, a floor's through it).
         if (vol && scene_.blocked_by_opaque_core(origin, es.wi, dist)) return Rgb(0.0f);
+        // The phase value after the shadow ray's first cast, before any tracking: a ray that
+        // meets an opaque surface at once (towards the floor under a sphere) needs neither, and
+        // a value of 0 (often, below a height-field shell's tangent plane) spares the tracking.
         float f_pdf = 0.0f;
-        Rgb f = eval(es.wi, &f_pdf);
-        if (f.is_black()) return Rgb(0.0f);
-        Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler);
+        Rgb f(0.0f);
+        Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler, [&] {
+            f = eval(es.wi, &f_pdf);
+            return !f.is_black();
+        });
         if (T.is_black()) return Rgb(0.0f);
         float light_pdf = es.pdf * sel_pdf;
         float w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);

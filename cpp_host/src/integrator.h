@@ -22,6 +22,13 @@ public:
     Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, Sampler& sampler) const;
 
 private:
+    /// The same, with `unblocked()` called once after the first ray cast unless that cast found
+    /// an opaque surface: 0 without tracking any medium when it returns false (a next-event
+    /// estimate whose phase value is 0, computed only for rays that are not blocked at once).
+    template <class Unblocked>
+    Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, Sampler& sampler,
+                             Unblocked&& unblocked) const;
+
     const Scene& scene_;
 };
 

@@ -560,6 +560,12 @@ typedef struct mf_grid {
  * until it finds it outside. Same results as the ray cast: the shell's density is zero between
  * its top and the boundary.
  *
+ * `survival` 0 (as zero-initialised) or 1: the host kept the ray unconditionally. Otherwise, for
+ * [`mf_track_transmittance`] only, the probability in `(0, 1)` with which it kept this shadow
+ * ray in a Russian roulette of its own ([`mf_track_depth_roulette`]): the estimate is then of
+ * `T / survival` (the host multiplies by nothing more), and the call's own roulette counts
+ * that weight.
+ *
  * [`mf_enclosure_exit_level`]: crate::surface::mf_enclosure_exit_level
  */
 typedef struct mf_track_query {
@@ -568,6 +574,7 @@ typedef struct mf_track_query {
   double t_max;
   uint64_t seed;
   double exit_level;
+  double survival;
 } mf_track_query;
 
 /**
@@ -1251,6 +1258,32 @@ enum mf_status mf_track_transmittance_batch(const struct mf_medium *medium,
                                             const struct mf_track_query *queries,
                                             size_t count,
                                             struct mf_transmittance *out_transmittances);
+
+/**
+ * A Russian roulette on a shadow ray before the host evaluates or tracks anything for it: the
+ * ray descends from height `f_from` (at most the start's `f`) to `f_to` (at least the deepest
+ * `f` it reaches; for a sphere, its chord's closest approach), and its transmittance in
+ * `medium` about `surface` is at most `exp(−κ [ln Φ(min(f_from, top)/σ) − ln Φ(f_to/σ)])` (the
+ * bound of `mf_track_opaque_core`). With `u` uniform in `[0, 1)` (the host's), writes the
+ * probability with which the ray is kept, `min(1, bound / 0.5)`, or 0 when it is not: its
+ * estimate is then 0, with no phase value and no tracking. A kept ray's
+ * `mf_track_transmittance` takes it as `mf_track_query::survival` and estimates `T / survival`,
+ * its own roulette (at 0.5) counting the weight, so that the estimates are those the call
+ * would have made alone, a shallow ray's costs saved. `f_to >= f_from` (a ray that does not
+ * descend) keeps the ray with probability 1. For stationary parameters only (as
+ * `mf_track_opaque_core`; with a varying field the bound does not hold: estimates stay
+ * unbiased, but may be larger). No callback is called. Errors: NaN levels, `u` outside
+ * `[0, 1)`, NULL pointers (nothing written).
+ *
+ * # Safety
+ * Pointers must be NULL or valid.
+ */
+enum mf_status mf_track_depth_roulette(const struct mf_medium *medium,
+                                       const struct mf_surface *surface,
+                                       double f_from,
+                                       double f_to,
+                                       double u,
+                                       double *out_survival);
 
 /**
  * The opaque core of `medium` about `surface` (stationary parameters; see the Rust crate's

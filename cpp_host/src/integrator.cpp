@@ -22,8 +22,18 @@ thread_local EventRecords event_records;
 
 template <class Unblocked>
 Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium,
-                                         Sampler& sampler, Unblocked&& unblocked) const {
+                                         Sampler& sampler, const Scene::ShadowRoulette& kept,
+                                         Unblocked&& unblocked) const {
     const bool vol = scene_.integrator.volumetric;
+    // The roulette's weight, until its medium's estimate takes it (applied once, whatever the
+    // ray meets).
+    double pending = kept.survival;
+    auto transmittance_of = [&](const Medium& m, const Ray& r, float seg) {
+        if (&m != kept.medium || pending == 1.0) return m.transmittance(r, seg, sampler);
+        pending = 1.0;
+        return m.transmittance_kept(r, seg, sampler, kept.survival);
+    };
+    auto weighted = [&](const Rgb& T) { return pending == 1.0 ? T : T * float(1.0 / pending); };
     Rgb T(1.0f);
     for (int i = 0; i < kMaxNullCrossings; ++i) {
         Ray r(o, d, 0.0f, dist);
@@ -51,11 +61,16 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
                 exited = t_end < seg;
                 if (exited) seg = t_end;
             } else if (medium) {
-                T *= medium->transmittance(r, seg, sampler);
+                T *= transmittance_of(*medium, r, seg);
             }
             for (const SuperposedMedium& m : scene_.superposed_media()) {
                 if (T.is_black()) break;
-                T *= m.transmittance(r, seg, sampler);
+                if (m.medium() == kept.medium && pending != 1.0) {
+                    pending = 1.0;
+                    T *= m.transmittance_kept(r, seg, sampler, kept.survival);
+                } else {
+                    T *= m.transmittance(r, seg, sampler);
+                }
             }
             if (T.is_black()) return T;
             if (exited) {  // left the region before any hit: on from there, outside
@@ -65,13 +80,13 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
                 continue;
             }
         }
-        if (!hit) return T;
+        if (!hit) return weighted(T);
         T *= pass;
         if (h.shape->is_medium_transition()) medium = h.shape->target_medium(h.ng, d);
         o = offset_ray_origin(h.p, h.ng, d);
         if (std::isfinite(dist)) {
             dist -= h.t;
-            if (dist <= 0) return T;
+            if (dist <= 0) return weighted(T);
         }
     }
     return Rgb(0.0f);
@@ -79,7 +94,7 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
 
 Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium,
                                          Sampler& sampler) const {
-    return shadow_transmittance(o, d, dist, medium, sampler, [] { return true; });
+    return shadow_transmittance(o, d, dist, medium, sampler, Scene::ShadowRoulette{}, [] { return true; });
 }
 
 Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
@@ -135,12 +150,17 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         // A shell's opaque core ends the shadow ray with a transmittance that rounds to 0: no
         // value, no tracking (a collision's light from inside the sphere, a floor's through it).
         if (vol && scene_.blocked_by_opaque_core(origin, es.wi, dist)) return Rgb(0.0f);
+        // A ray into a shell's interior whose transmittance is bound to be small is kept with a
+        // probability of that bound over the library's roulette threshold (0.5): the estimates
+        // its tracking would make, a shallow ray's evaluations saved.
+        const Scene::ShadowRoulette kept = vol ? scene_.shadow_roulette(origin, es.wi, dist, sampler) : Scene::ShadowRoulette{};
+        if (!(kept.survival > 0)) return Rgb(0.0f);
         // The phase value after the shadow ray's first cast, before any tracking: a ray that
         // meets an opaque surface at once (towards the floor under a sphere) needs neither, and
         // a value of 0 (often, below a height-field shell's tangent plane) spares the tracking.
         float f_pdf = 0.0f;
         Rgb f(0.0f);
-        Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler, [&] {
+        Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler, kept, [&] {
             f = eval(es.wi, &f_pdf);
             return !f.is_black();
         });

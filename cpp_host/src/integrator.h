@@ -22,12 +22,14 @@ public:
     Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, Sampler& sampler) const;
 
 private:
-    /// The same, with `unblocked()` called once after the first ray cast unless that cast found
-    /// an opaque surface: 0 without tracking any medium when it returns false (a next-event
-    /// estimate whose phase value is 0, computed only for rays that are not blocked at once).
+    /// The same for a ray `kept` by the depth roulette (Scene::shadow_roulette): an estimate of
+    /// T / kept.survival, whose weight the roulette's medium takes in its own estimate. And with
+    /// `unblocked()` called once after the first ray cast unless that cast found an opaque
+    /// surface: 0 without tracking any medium when it returns false (a next-event estimate whose
+    /// phase value is 0, computed only for rays that are not blocked at once).
     template <class Unblocked>
     Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, Sampler& sampler,
-                             Unblocked&& unblocked) const;
+                             const Scene::ShadowRoulette& kept, Unblocked&& unblocked) const;
 
     const Scene& scene_;
 };

@@ -108,6 +108,13 @@ public:
                                     Sampler& sampler, MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const = 0;
     /// Transmittance (or an unbiased estimate of it) over [0, t_max].
     virtual Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const = 0;
+    /// transmittance() of a shadow ray the integrator kept with probability `survival` in
+    /// (0, 1] in a Russian roulette (Scene::shadow_roulette): an estimate of T / survival. A
+    /// medium whose estimator plays a roulette of its own counts the weight in it
+    /// (MacrofacetMedium: mf_track_query::survival); by default the estimate is divided.
+    virtual Rgb transmittance_kept(const Ray& ray, float t_max, Sampler& sampler, double survival) const {
+        return transmittance(ray, t_max, sampler) * float(1.0 / survival);
+    }
     virtual const PhaseFunction& phase() const = 0;
     virtual std::string name() const = 0;
 

@@ -102,10 +102,10 @@ private:
     std::string label_;
 };
 
-/// `exit_level` 0: up to t_max only (mf_track_query).
+/// `exit_level` 0: up to t_max only; no roulette's survival (mf_track_query).
 mf_track_query query(const Ray& ray, float t_max, double exit_level, Sampler& sampler) {
     return mf_track_query{to_mf(ray.o), to_mf_unit(ray.d), std::isfinite(t_max) ? double(t_max) : INFINITY, sampler.next_u64(),
-                          exit_level};
+                          exit_level, 0.0};
 }
 
 }  // namespace
@@ -210,6 +210,20 @@ bool MacrofacetMedium::flight(const mf_track_query& q, const Ray& ray, MediumInt
 Rgb MacrofacetMedium::transmittance(const Ray& ray, float t_max, Sampler& sampler) const {
     float t_end;
     return transmittance_of(query(ray, t_max, 0.0, sampler), &t_end);
+}
+
+Rgb MacrofacetMedium::transmittance_kept(const Ray& ray, float t_max, Sampler& sampler, double survival) const {
+    mf_track_query q = query(ray, t_max, 0.0, sampler);
+    q.survival = survival;
+    float t_end;
+    return transmittance_of(q, &t_end);
+}
+
+double MacrofacetMedium::depth_roulette(double f_from, double f_to, double u) const {
+    double survival;
+    if (mf_track_depth_roulette(handle_, surface_->handle(), f_from, f_to, u, &survival) != MF_OK)
+        throw Error(label_ + ": mf_track_depth_roulette failed: " + mf_last_error());
+    return survival;
 }
 
 Rgb MacrofacetMedium::transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const {

@@ -44,6 +44,7 @@ public:
     bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
                             MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const override;
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const override;
+    Rgb transmittance_kept(const Ray& ray, float t_max, Sampler& sampler, double survival) const override;
     bool sample_free_flight_to_exit(const Ray& ray, float t_max, Sampler& sampler, MediumInteraction* mi,
                                     float* t_end) const override;
     Rgb transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const override;
@@ -67,6 +68,9 @@ public:
         *core_level = core_level_;
         return std::isfinite(core_level_);
     }
+    /// The probability with which a shadow ray that descends from height f_from to f_to is kept
+    /// for the uniform u (mf_track_depth_roulette; 0: not kept).
+    double depth_roulette(double f_from, double f_to, double u) const;
     /// The sphere whose core mfrender tests shadow rays against (Scene::add_opaque_core), with
     /// the levels: when the mean surface is a sphere and the core lies inside it.
     const MeanSurface::Sphere* sphere_core(double* start_level, double* core_level) const {

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "error.h"
+#include "medium_macrofacet.h"
 
 namespace mf {
 
@@ -122,17 +123,45 @@ Rgb SuperposedMedium::transmittance(const Ray& ray, float t_max, Sampler& sample
     return medium_->transmittance(inside, length, sampler);
 }
 
+Rgb SuperposedMedium::transmittance_kept(const Ray& ray, float t_max, Sampler& sampler, double survival) const {
+    Ray inside;
+    float t0, length;
+    if (!clip(ray, t_max, &inside, &t0, &length)) return Rgb(float(1.0 / survival));
+    return medium_->transmittance_kept(inside, length, sampler, survival);
+}
+
 void Scene::add_superposed_medium(SuperposedMedium m) {
     bounds_.expand(m.region().bounds());
     superposed_.push_back(std::move(m));
 }
 
-void Scene::add_opaque_core(const Vec3& center, double radius, double start_level, double core_level) {
+void Scene::add_opaque_core(const Vec3& center, double radius, double start_level, double core_level,
+                            const MacrofacetMedium* medium) {
     // The test's sphere lies 1e-6 r inside the core and its origins 1e-6 r above the start level:
     // far beyond the rounding of a chord in double precision (~1e-15 r).
     const double margin = 1e-6 * radius, core = radius + core_level - margin, start = radius + start_level + margin;
     if (!(core > 0) || !(start > core)) return;  // (a core deeper than the centre: none)
-    cores_.push_back(OpaqueCore{center.x, center.y, center.z, start * start, core * core});
+    cores_.push_back(OpaqueCore{center.x, center.y, center.z, start * start, core * core, radius, medium});
+}
+
+Scene::ShadowRoulette Scene::shadow_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const {
+    for (const OpaqueCore& c : cores_) {
+        const double ox = double(o.x) - c.cx, oy = double(o.y) - c.cy, oz = double(o.z) - c.cz;
+        const double b = ox * d.x + oy * d.y + oz * d.z;
+        if (!(b < 0)) continue;  // moving away from the centre: the height only grows
+        const double dd = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
+        const double oo = ox * ox + oy * oy + oz * oz;
+        // The chord's deepest point: its closest approach to the centre, or its end.
+        const double s = std::min(-b / dd, double(dist));
+        const double deepest2 = std::max(0.0, oo + s * (2 * b + s * dd));
+        // Heights rounded the bound's safe ways (the start down, the deepest point up) by the
+        // opaque cores' margin, far beyond the rounding of doubles.
+        const double margin = 1e-6 * c.radius;
+        const double f_from = std::sqrt(oo) - c.radius - margin, f_to = std::sqrt(deepest2) - c.radius + margin;
+        if (!(f_to < f_from)) continue;
+        return ShadowRoulette{c.medium->depth_roulette(f_from, f_to, double(sampler.next_1d())), c.medium};
+    }
+    return ShadowRoulette{};
 }
 
 bool Scene::blocked_by_opaque_core(const Vec3& o, const Vec3& d, float dist) const {

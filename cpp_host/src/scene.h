@@ -18,6 +18,8 @@ namespace mf {
 /// and +y up; fov measured along fov_axis (x, y, diagonal, smaller, larger). Mitsuba's
 /// `orthographic` (orthographic = true): parallel rays along local +z from the near plane over
 /// x in [-1, 1], y in [-1/aspect, 1/aspect] (to_world scales that window).
+class MacrofacetMedium;
+
 struct Camera {
     Mat4 to_world;
     bool orthographic = false;
@@ -60,6 +62,8 @@ public:
                             MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const;
     /// Medium::transmittance over the part of [0, t_max] inside the region.
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const;
+    /// Medium::transmittance_kept over that part: an estimate of T / survival.
+    Rgb transmittance_kept(const Ray& ray, float t_max, Sampler& sampler, double survival) const;
 
 private:
     static constexpr double kRegionMargin = 1e-4;
@@ -103,11 +107,24 @@ public:
     /// The opaque core of a macrofacet shell on the sphere of `center` and `radius`
     /// (MacrofacetMedium::opaque_core): rays from f >= start_level that reach f <= core_level
     /// have a transmittance that rounds to 0.
-    void add_opaque_core(const Vec3& center, double radius, double start_level, double core_level);
+    /// `medium` plays the depth roulette of shadow rays that descend into its shell
+    /// (shadow_roulette).
+    void add_opaque_core(const Vec3& center, double radius, double start_level, double core_level,
+                         const MacrofacetMedium* medium);
     /// True when the ray o + s d, s in [0, dist), meets an opaque core from an origin that may use
     /// it: a shadow ray that needs neither its phase or BSDF value nor tracking (its estimate
     /// would be 0). A few dozen instructions per core.
     bool blocked_by_opaque_core(const Vec3& o, const Vec3& d, float dist) const;
+    /// The depth roulette of a shadow ray o + s d, s in [0, dist) (mf_track_depth_roulette): the
+    /// ray descends into the first shell with a core from its height at o to its chord's deepest
+    /// point, which bounds its transmittance there. `survival` is the probability with which it
+    /// is kept (1: no roulette; 0: not kept, its estimate is 0 and nothing need be evaluated),
+    /// and `medium` the shell's, whose transmittance estimate takes it (Medium::transmittance_kept).
+    struct ShadowRoulette {
+        double survival = 1.0;
+        const Medium* medium = nullptr;
+    };
+    ShadowRoulette shadow_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const;
     const Aabb& bounds() const { return bounds_; }
     SceneSummary summary() const;
 
@@ -139,7 +156,8 @@ private:
     std::vector<SuperposedMedium> superposed_;
     /// add_opaque_core: squared radii, each with a margin for the chord's rounding.
     struct OpaqueCore {
-        double cx, cy, cz, start_radius2, core_radius2;
+        double cx, cy, cz, start_radius2, core_radius2, radius;
+        const MacrofacetMedium* medium;
     };
     std::vector<OpaqueCore> cores_;
     Aabb bounds_;

@@ -920,7 +920,7 @@ private:
             auto* m = dynamic_cast<const MacrofacetMedium*>(entry.first);
             double start, core;
             if (!opts_.opaque_cores || !m) continue;
-            if (const MeanSurface::Sphere* s = m->sphere_core(&start, &core)) scene_->add_opaque_core(s->center, s->radius, start, core);
+            if (const MeanSurface::Sphere* s = m->sphere_core(&start, &core)) scene_->add_opaque_core(s->center, s->radius, start, core, m);
         }
         for (const auto& b : macrofacet_boundaries_) {
             // (a medium with several boundaries, as Mitsuba allows, keeps them: its region is their union)

@@ -35,8 +35,9 @@ struct BuildOptions {
     /// find each ray's exit from its region itself (SceneBuilder::let_media_find_exits); false
     /// (mfrender --cast-exits) casts a ray for every exit, for comparison: the same image.
     bool media_find_exits = true;
-    /// End shadow rays at the opaque cores of macrofacet shells on spheres (Scene::add_opaque_core);
-    /// false (mfrender --no-opaque-cores) tracks them, for comparison: the same image.
+    /// End shadow rays at the opaque cores of macrofacet shells on spheres (Scene::add_opaque_core)
+    /// and play the depth roulette on shallower ones (Scene::shadow_roulette); false (mfrender
+    /// --no-opaque-cores) tracks them all, for comparison: the same image, to noise.
     bool opaque_cores = true;
 };
 

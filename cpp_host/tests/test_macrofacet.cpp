@@ -592,9 +592,11 @@ TEST_CASE(media_find_their_exits) {
 }
 
 // A thin shell's opaque core (mf_track_opaque_core, Scene::add_opaque_core) ends the shadow rays
-// that meet it from above its start level: the image is the one that tracks them
+// that meet it from above its start level, and the depth roulette (mf_track_depth_roulette,
+// Scene::shadow_roulette) keeps those that descend into the shell with a probability of their
+// transmittance's bound over 0.5: the image is the one that tracks them all
 // (--no-opaque-cores), to noise. The geometric test takes only such rays, and only where they
-// reach the core before their end.
+// reach the core before their end; the roulette, only rays that descend.
 TEST_CASE(opaque_cores) {
     const std::string xml = "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(3.0f, 40.0f, 24, 24, 64) +
                             medium_xml("mf", R"(<float name="sigma" value="0.002"/><string name="distribution" value="beckmann"/><float name="alpha" value="0.3"/><string name="material" value="Au"/>)") +
@@ -619,6 +621,26 @@ TEST_CASE(opaque_cores) {
         CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, above), Vec3(0, 0, -1), float(-0.5 * core)));  // ends before it
         CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, 1.0f + 1.5f * float(start)), Vec3(0, 0, -1), inf));  // below the start level
         CHECK(!scene->blocked_by_opaque_core(Vec3(0, 0, 0.5f), Vec3(0, 0, -1), inf));           // inside the core
+        // From the mean surface: outward, grazing (1° under the tangent plane: 0.08σ deep, a bound
+        // of 0.94) and 10° under it (7.6σ deep, a bound of about Φ(−7.6)/Φ(0) ≈ 3e-14).
+        Sampler sampler(1, 2, 3);
+        const auto below = [](double degrees) {
+            const double a = degrees * 3.14159265358979 / 180;
+            return Vec3(float(std::cos(a)), 0.0f, float(-std::sin(a)));
+        };
+        const Vec3 top(0, 0, 1);
+        int kept = 0;
+        for (int i = 0; i < 200; ++i) {
+            const Scene::ShadowRoulette out = scene->shadow_roulette(top, Vec3(0.6f, 0.0f, 0.8f), inf, sampler);
+            const Scene::ShadowRoulette graze = scene->shadow_roulette(top, below(1), inf, sampler);
+            const Scene::ShadowRoulette steep = scene->shadow_roulette(top, below(10), inf, sampler);
+            CHECK(out.survival == 1.0 && out.medium == nullptr);
+            CHECK(graze.survival == 1.0);
+            CHECK(steep.medium == (cores ? m : nullptr));
+            CHECK(cores ? steep.survival == 0.0 || (steep.survival > 0 && steep.survival < 1e-3) : steep.survival == 1.0);
+            kept += steep.survival > 0;
+        }
+        CHECK_MSG(cores ? kept <= 2 : kept == 200, "kept " + std::to_string(kept));
     }
     expect_same_image(work("cores.xml"), "--no-opaque-cores", "opaque_cores");
 }

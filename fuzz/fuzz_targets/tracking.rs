@@ -1,7 +1,7 @@
 //! The tracking API: `mf_surface_new_sphere`, `_mesh`, `_grid`, `_callbacks` (valid, degenerate
 //! and invalid), `mf_surface_eval`, `_bounding_box`, `_enclosure`, `mf_enclosure_*`,
 //! `mf_surface_free`, `mf_track_free_flight`, `mf_track_transmittance`, their batches and
-//! `mf_track_opaque_core` on media from the fuzz input, with callback surfaces that lie after a
+//! `mf_track_opaque_core` and `mf_track_depth_roulette` on media from the fuzz input, with callback surfaces that lie after a
 //! number of calls (`fuzz/src/host.rs`) and queries biased toward the surface
 //! (`fuzz/src/track.rs`).
 #![no_main]
@@ -36,6 +36,7 @@ fuzz_target!(|data: &[u8]| {
     }
     scene.batches(&queries);
     scene.opaque_core(&queries[0]);
+    scene.depth_roulette(&queries[0]);
     match b.u8() % 32 {
         0 => scene.nulls(&queries[0]),
         1 => scene.enclosure(&mut b, top),

@@ -1,5 +1,5 @@
 //! The tracking calls with their property checked, shared by the `tracking` and `fields`
-//! targets: `mf_track_free_flight`, `mf_track_transmittance`, their batches, `mf_surface_eval`,
+//! targets: `mf_track_free_flight`, `mf_track_transmittance`, their batches, `mf_track_depth_roulette`, `mf_surface_eval`,
 //! `mf_surface_bounding_box` and `mf_surface_enclosure` on a medium, a surface and (sometimes) a
 //! field from the fuzz input, with queries biased toward the surface, its box and the shell.
 //!
@@ -91,7 +91,7 @@ impl Scene<'_> {
         // Every fourth query finds its exit above an exit level from the shell's top to 2.75
         // times it, drawn from the seed's bits (the committed inputs' bytes keep their meaning).
         let exit_level = if seed % 4 == 0 { self.shell_top() * (1.0 + (seed >> 2 & 7) as f64 / 4.0) } else { 0.0 };
-        let q = mf_track_query { origin: vec3(origin), d, t_max, seed, exit_level };
+        let q = mf_track_query { origin: vec3(origin), d, t_max, seed, exit_level, survival: 0.0 };
         if debug() {
             eprintln!("query: {q:?}");
         }
@@ -274,6 +274,42 @@ impl Scene<'_> {
             if let Some(tr) = self.transmittance(&into) {
                 assert_eq!(tr.transmittance, 0.0, "a ray from f >= {start} into the opaque core (f <= {core} at t = {t}): {into:?}");
             }
+        }
+    }
+
+    /// `mf_track_depth_roulette` from the query's origin, down a depth and with a uniform drawn
+    /// from its seed's bits: a survival of 0 or in `(0, 1]`; NaN levels and `u` outside `[0, 1)`
+    /// refused with nothing written. A kept ray's transmittance with that survival is an
+    /// estimate in `[0, 1 / survival]`; a free flight refuses a survival below 1.
+    pub fn depth_roulette(&mut self, q: &mf_track_query) {
+        let (m, s) = (self.medium.0 as *const mf_medium, self.surface.0 as *const mf_surface);
+        let f_from = if dvec3(q.origin).is_finite() { self.eval(dvec3(q.origin)).map_or(0.0, |p| p.f) } else { 0.0 };
+        let f_to = f_from - self.shell_top() * ((q.seed >> 8) & 63) as f64 / 8.0;
+        let u = ((q.seed >> 16) & 0xffff) as f64 / 65536.0;
+        let roulette = |from: f64, to: f64, u: f64| {
+            let mut survival = -1.0;
+            // SAFETY: live handles, a valid out-pointer.
+            let status = unsafe { mf_track_depth_roulette(m, s, from, to, u, &mut survival) };
+            (status, survival)
+        };
+        for (from, to, u) in [(f64::NAN, f_to, u), (f_from, f64::NAN, u), (f_from, f_to, 1.0), (f_from, f_to, -0.0 - 1e-300), (f_from, f_to, f64::NAN)] {
+            let (status, survival) = roulette(from, to, u);
+            assert!(status != mf_status::MF_OK && survival == -1.0, "roulette ({from}, {to}, {u}): {status:?}, wrote {survival}");
+        }
+        check::null_out(|o| unsafe { mf_track_depth_roulette(m, s, f_from, f_to, u, o) });
+        let (status, survival) = roulette(f_from, f_to, u);
+        assert_eq!(status, mf_status::MF_OK, "{}", check::last_error());
+        assert!(survival == 0.0 || (survival > 0.0 && survival <= 1.0), "survival {survival}");
+        if !(survival > 0.0 && survival < 1.0) {
+            return;
+        }
+        let kept = mf_track_query { survival, ..*q };
+        let (f, user_data) = (self.field_ptr(), self.host.user_data());
+        assert!(check::call(|o| unsafe { mf_track_free_flight(m, s, f, user_data, &kept, o) }).is_err(), "a free flight took survival {survival}");
+        if let Ok(t) = self.with_host("mf_track_transmittance", |u| check::call(|o| unsafe { mf_track_transmittance(m, s, f, u, &kept, o) })) {
+            assert!(t.transmittance >= 0.0 && t.transmittance <= (1.0 + 1e-12) / survival, "survival {survival}: estimate {}", t.transmittance);
+            check::ended(t.t, &kept);
+            self.honest_stats(&t.stats);
         }
     }
 

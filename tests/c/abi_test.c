@@ -1230,11 +1230,45 @@ static void test_opaque_core(void) {
   for (uint64_t seed = 0; seed < 32; ++seed) {
     /* from the start level, 30 degrees below the tangent plane: the ray reaches f = -0.134 */
     const double r = 1 + start;
-    mf_track_query in = {v3(0, 0, r), normalize(v3(sqrt(3.0), 0, -1)), INFINITY, seed, 0};
+    mf_track_query in = {v3(0, 0, r), normalize(v3(sqrt(3.0), 0, -1)), INFINITY, seed, 0, 0};
     mf_transmittance t;
     EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &in, &t));
     CHECK(t.transmittance == 0, "a ray into the core must be opaque (seed %llu: %g)", (unsigned long long)seed, t.transmittance);
   }
+  /* The depth roulette: a ray from the mean surface 10 degrees below its tangent plane reaches
+     15 sigma deep (bound ~ e^-120): never kept for u >= 1e-30; a grazing one (0.5 degree, 0.04
+     sigma deep) always; a kept ray's estimate is of T / survival. */
+  double survival = -1;
+  EXPECT_OK(mf_track_depth_roulette(m, sphere, 0.0, -15e-3, 1e-30, &survival));
+  CHECK(survival == 0, "a deep ray kept with %g", survival);
+  EXPECT_OK(mf_track_depth_roulette(m, sphere, 0.0, -4e-5, 0.999, &survival));
+  CHECK(survival == 1, "a grazing ray kept with %g", survival);
+  EXPECT_OK(mf_track_depth_roulette(m, sphere, 0.0, 1e-3, 0.5, &survival));
+  CHECK(survival == 1, "a ray that does not descend kept with %g", survival);
+  EXPECT_OK(mf_track_depth_roulette(m, sphere, 0.0, -2e-3, 0.0, &survival)); /* ~2 sigma: kept at u = 0 */
+  CHECK(survival > 0 && survival < 1, "2 sigma deep: survival %g", survival);
+  {
+    /* 5.7 degrees below the tangent plane from f = 0: the chord reaches 2.5 sigma deep */
+    mf_track_query kept = {v3(0, 0, 1), normalize(v3(10, 0, -1)), INFINITY, 3, 0, survival};
+    mf_transmittance t;
+    mf_collision c;
+    EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &kept, &t));
+    CHECK(t.transmittance >= 0 && t.transmittance <= 1 / survival, "kept estimate %g (survival %g)", t.transmittance, survival);
+    EXPECT_STATUS(mf_track_free_flight(m, sphere, NULL, NULL, &kept, &c), MF_ERROR_INVALID_ARGUMENT, "transmittances only");
+    kept.survival = 1.5;
+    EXPECT_STATUS(mf_track_transmittance(m, sphere, NULL, NULL, &kept, &t), MF_ERROR_INVALID_ARGUMENT, "survival");
+    kept.survival = NAN;
+    EXPECT_STATUS(mf_track_transmittance(m, sphere, NULL, NULL, &kept, &t), MF_ERROR_INVALID_ARGUMENT, "survival");
+  }
+  double keep = 7;
+  EXPECT_STATUS(mf_track_depth_roulette(m, sphere, NAN, -1e-3, 0.5, &keep), MF_ERROR_INVALID_ARGUMENT, "NaN");
+  EXPECT_STATUS(mf_track_depth_roulette(m, sphere, 0.0, NAN, 0.5, &keep), MF_ERROR_INVALID_ARGUMENT, "NaN");
+  EXPECT_STATUS(mf_track_depth_roulette(m, sphere, 0.0, -1e-3, 1.0, &keep), MF_ERROR_INVALID_ARGUMENT, "u must be");
+  EXPECT_STATUS(mf_track_depth_roulette(m, sphere, 0.0, -1e-3, -0.1, &keep), MF_ERROR_INVALID_ARGUMENT, "u must be");
+  EXPECT_STATUS(mf_track_depth_roulette(NULL, sphere, 0.0, -1e-3, 0.5, &keep), MF_ERROR_NULL_POINTER, "medium");
+  EXPECT_STATUS(mf_track_depth_roulette(m, NULL, 0.0, -1e-3, 0.5, &keep), MF_ERROR_NULL_POINTER, "surface");
+  EXPECT_STATUS(mf_track_depth_roulette(m, sphere, 0.0, -1e-3, 0.5, NULL), MF_ERROR_NULL_POINTER, "out_survival");
+  CHECK(keep == 7, "mf_track_depth_roulette wrote its out-parameter on failure");
   double mesh_start = 1, mesh_core = 1;
   EXPECT_OK(mf_track_opaque_core(m, mesh, &mesh_start, &mesh_core));
   CHECK(mesh_start == start && mesh_core <= core, "mesh core %g above the sphere's %g", mesh_core, core);
@@ -1276,7 +1310,7 @@ static void test_surfaces_and_tracking(void) {
   /* Free flights and transmittance: same seed, same answer (built-in vs host sphere too). */
   double top = 0;
   EXPECT_OK(mf_medium_shell_top(m, &top));
-  const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99, 0};
+  const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99, 0, 0};
   mf_collision c1, c2;
   EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &c1));
   hs.calls = 0;
@@ -1299,13 +1333,13 @@ static void test_surfaces_and_tracking(void) {
   CHECK(vp.pdf == pdf && same_bits(&vp.value, &value, sizeof value), "mf_phase_eval_pdf must equal eval and pdf");
 
   mf_transmittance t1, t2;
-  const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5, 0};
+  const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5, 0, 0};
   EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t1));
   EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t2));
   CHECK(t1.transmittance == t2.transmittance && t1.transmittance >= 0 && t1.transmittance <= 1,
         "transmittance %g / %g", t1.transmittance, t2.transmittance);
   /* Passing: t_max short of the shell. */
-  const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5, 0};
+  const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5, 0, 0};
   EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &shortq, &c1));
   CHECK(!c1.scattered && c1.t == 0.5, "a ray that ends above the shell passes (t = %g)", c1.t);
 
@@ -1475,7 +1509,7 @@ static void test_surfaces_and_tracking(void) {
     EXPECT_OK(mf_surface_eval(grid, NULL, v3(0.65, 0, 0), &gp));
     CHECK_ABS(gp.f, 0.05, 8e-3); /* trilinear error h²/8 × 2/|x| with h = 2/15 */
     CHECK(gp.normal.x > 0.99, "grid normal (%g, %g, %g)", gp.normal.x, gp.normal.y, gp.normal.z);
-    const mf_track_query gq = {v3(-3, 0.01, 0.02), v3(1, 0, 0), INFINITY, 3, 0};
+    const mf_track_query gq = {v3(-3, 0.01, 0.02), v3(1, 0, 0), INFINITY, 3, 0, 0};
     EXPECT_OK(mf_track_free_flight(m, grid, NULL, NULL, &gq, &c1));
     CHECK(c1.scattered && c1.stats.majorant_violations == 0, "a ray into the grid sphere scatters");
     mf_surface *g2 = (mf_surface *)0x1;
@@ -1519,7 +1553,7 @@ static void test_surfaces_and_tracking(void) {
     EXPECT_OK(mf_surface_eval(mesh, NULL, v3(em.positions[3 * i], em.positions[3 * i + 1], em.positions[3 * i + 2]), &at));
     CHECK(at.f <= exit_level, "enclosure vertex %zu has f = %g above the exit level %g", i, at.f, exit_level);
   }
-  const mf_track_query outward = {v3(2, 0, 0), v3(1, 0, 0), INFINITY, 7, exit_level};
+  const mf_track_query outward = {v3(2, 0, 0), v3(1, 0, 0), INFINITY, 7, exit_level, 0};
   mf_collision out_c;
   mf_transmittance out_t;
   EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &outward, &out_c));
@@ -1601,7 +1635,7 @@ static void test_fields(void) {
   EXPECT_OK(mf_field_new_callbacks(&own_cb, &own));
   host_field same = {1, 0};
   for (uint64_t seed = 0; seed < 20; ++seed) {
-    const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, seed, 0};
+    const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, seed, 0, 0};
     mf_collision plain, through;
     EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &plain));
     EXPECT_OK(mf_track_free_flight(m, sphere, own, &same, &q, &through));
@@ -1616,7 +1650,7 @@ static void test_fields(void) {
   host_field stepped = {0, 0};
   int far_side = 0;
   for (uint64_t seed = 0; seed < 40; ++seed) {
-    const mf_track_query q = {v3(3, 0.2, 0.1), v3(-1, 0, 0), INFINITY, seed, 0};
+    const mf_track_query q = {v3(3, 0.2, 0.1), v3(-1, 0, 0), INFINITY, seed, 0, 0};
     mf_collision c;
     EXPECT_OK(mf_track_free_flight(m, sphere, field, &stepped, &q, &c));
     CHECK(c.stats.majorant_violations == 0, "violations with honest bounds");
@@ -1678,7 +1712,7 @@ static void test_fields(void) {
   bad.anisotropy[0] = 1, bad.anisotropy[1] = -1, bad.anisotropy[2] = 1;
   EXPECT_STATUS(mf_phase_eval_pdf_local(m, &bad, &fr, wi, wo, &half), MF_ERROR_INVALID_ARGUMENT, "positive definite");
   CHECK(same_bits(&half, &local, sizeof half), "a failed _local call wrote its out-parameter");
-  const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, 1, 0};
+  const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, 1, 0, 0};
   mf_collision c;
   host_field failing = {2, 0}, negative = {3, 0}, unknown = {4, 0};
   EXPECT_STATUS(mf_track_free_flight(m, sphere, field, &failing, &q, &c), MF_ERROR_CALLBACK, "returned 7");

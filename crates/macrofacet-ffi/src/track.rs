@@ -37,6 +37,12 @@ use std::ffi::c_void;
 /// until it finds it outside. Same results as the ray cast: the shell's density is zero between
 /// its top and the boundary.
 ///
+/// `survival` 0 (as zero-initialised) or 1: the host kept the ray unconditionally. Otherwise, for
+/// [`mf_track_transmittance`] only, the probability in `(0, 1)` with which it kept this shadow
+/// ray in a Russian roulette of its own ([`mf_track_depth_roulette`]): the estimate is then of
+/// `T / survival` (the host multiplies by nothing more), and the call's own roulette counts
+/// that weight.
+///
 /// [`mf_enclosure_exit_level`]: crate::surface::mf_enclosure_exit_level
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,6 +52,7 @@ pub struct mf_track_query {
     pub t_max: f64,
     pub seed: u64,
     pub exit_level: f64,
+    pub survival: f64,
 }
 
 /// What one tracking call cost: surface queries (callbacks), tracked segments (bound queries),
@@ -95,9 +102,30 @@ impl From<TrackStats> for mf_track_stats {
     }
 }
 
-/// A validated query: origin, unit direction, length, exit level (`+inf` for none; the
-/// tracker checks it against the shell's top).
-fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64, f64)> {
+/// A validated query, as the tracker takes it.
+#[derive(Clone, Copy)]
+struct Ray {
+    origin: DVec3,
+    d: DVec3,
+    t_max: f64,
+    /// `+inf` for none (the tracker checks it against the shell's top).
+    exit_level: f64,
+    /// 1 for none.
+    survival: f64,
+}
+
+/// A query's validated `survival` (0 as 1); only transmittances take one below 1.
+fn survival(q: &mf_track_query, transmittance: bool) -> FfiResult<f64> {
+    match q.survival {
+        0.0 | 1.0 => Ok(1.0),
+        p if transmittance && p > 0.0 && p < 1.0 => Ok(p),
+        p if transmittance => Err(Error::new(ErrorKind::InvalidArgument, format!("survival must be 0 (none) or in (0, 1], got {p}")).into()),
+        p => Err(Error::new(ErrorKind::InvalidArgument, format!("survival applies to transmittances only: a free flight's must be 0 or 1, got {p}")).into()),
+    }
+}
+
+/// A validated query, for a transmittance or a free flight.
+fn query(q: &mf_track_query, transmittance: bool) -> FfiResult<Ray> {
     let origin = DVec3::from(q.origin);
     if !origin.is_finite() {
         return Err(Error::new(ErrorKind::InvalidArgument, format!("origin must be finite, got {origin}")).into());
@@ -111,7 +139,7 @@ fn query(q: &mf_track_query) -> FfiResult<(DVec3, DVec3, f64, f64)> {
         level if level.is_finite() && level > 0.0 => level,
         level => return Err(Error::new(ErrorKind::InvalidArgument, format!("exit_level must be 0 (none) or finite and at least the shell's top, got {level}")).into()),
     };
-    Ok((origin, d, q.t_max, exit_level))
+    Ok(Ray { origin, d, t_max: q.t_max, exit_level, survival: survival(q, transmittance)? })
 }
 
 /// One call: a free flight or a transmittance, with the field (if any) and the host's data. The
@@ -124,7 +152,7 @@ struct Call<'a> {
     bounds: &'a ProjectedAreaBounds,
     field: Option<&'a mf_field>,
     user_data: *mut c_void,
-    ray: (DVec3, DVec3, f64, f64),
+    ray: Ray,
     seed: u64,
 }
 
@@ -140,12 +168,12 @@ impl SurfaceVisitor for Call<'_> {
         match self.field {
             // The collision reports no uv: the tracker need not complete it.
             None => {
-                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv();
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv().after_roulette(self.ray.survival);
                 run(self.out, self.ray, self.seed, &tracker)
             }
             Some(field) => {
                 let field = CallbackField::new(field, self.user_data);
-                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv();
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv().after_roulette(self.ray.survival);
                 run(self.out, self.ray, self.seed, &tracker)
             }
         }
@@ -158,9 +186,9 @@ fn passed(t: f64, stats: mf_track_stats) -> mf_collision {
     mf_collision { scattered: false, t, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, local: mf_local_params::NONE, stats }
 }
 
-fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: (DVec3, DVec3, f64, f64), seed: u64, tracker: &Tracker<S, F>) -> macrofacet::error::Result<()> {
+fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: Ray, seed: u64, tracker: &Tracker<S, F>) -> macrofacet::error::Result<()> {
     let mut stats = TrackStats::default();
-    let (origin, d, t_max, exit_level) = ray;
+    let Ray { origin, d, t_max, exit_level, .. } = ray;
     let rng = &mut Pcg32::new(seed, TRACK_STREAM);
     let exits = exit_level.is_finite();
     match out {
@@ -194,7 +222,8 @@ pub(super) fn field_arg<'a>(field: *const mf_field) -> Option<&'a mf_field> {
 }
 
 fn track(out: Out<'_>, medium: &mf_medium, surface: &mf_surface, field: Option<&mf_field>, user_data: *mut c_void, q: &mf_track_query) -> FfiResult<()> {
-    let call = Call { out, medium: &medium.inner, bounds: &medium.bounds, field, user_data, ray: query(q)?, seed: q.seed };
+    let ray = query(q, matches!(out, Out::Transmittance(_)))?;
+    let call = Call { out, medium: &medium.inner, bounds: &medium.bounds, field, user_data, ray, seed: q.seed };
     Ok(with_surface(surface, user_data, call)?)
 }
 
@@ -264,6 +293,7 @@ fn track_batch<R: Copy>(
     count: usize,
     output: *mut R,
     blank: R,
+    transmittances: bool,
     one: impl Fn(&mf_medium, &mf_surface, Option<&mf_field>, *mut c_void, &mf_track_query, &mut R) -> FfiResult<()>,
 ) -> mf_status {
     boundary(|| {
@@ -277,7 +307,7 @@ fn track_batch<R: Copy>(
         let queries = unsafe { std::slice::from_raw_parts(first, count) };
         let at = |i: usize, e: FfiError| FfiError { status: e.status, message: format!("query {i}: {}", e.message) };
         for (i, q) in queries.iter().enumerate() {
-            query(q).map_err(|e| at(i, e))?;
+            query(q, transmittances).map_err(|e| at(i, e))?;
         }
         // Results go to an array of blanks first, so that an error leaves the host's unchanged.
         let mut results = vec![blank; count];
@@ -304,7 +334,7 @@ pub unsafe extern "C" fn mf_track_free_flight_batch(
     count: usize,
     out_collisions: *mut mf_collision,
 ) -> mf_status {
-    track_batch(medium, surface, field, user_data, queries, count, out_collisions, passed(0.0, TrackStats::default().into()), free_flight)
+    track_batch(medium, surface, field, user_data, queries, count, out_collisions, passed(0.0, TrackStats::default().into()), false, free_flight)
 }
 
 /// Batch form of [`mf_track_transmittance`].
@@ -322,7 +352,52 @@ pub unsafe extern "C" fn mf_track_transmittance_batch(
     out_transmittances: *mut mf_transmittance,
 ) -> mf_status {
     let blank = mf_transmittance { transmittance: 0.0, t: 0.0, stats: TrackStats::default().into() };
-    track_batch(medium, surface, field, user_data, queries, count, out_transmittances, blank, transmittance)
+    track_batch(medium, surface, field, user_data, queries, count, out_transmittances, blank, true, transmittance)
+}
+
+/// A Russian roulette on a shadow ray before the host evaluates or tracks anything for it: the
+/// ray descends from height `f_from` (at most the start's `f`) to `f_to` (at least the deepest
+/// `f` it reaches; for a sphere, its chord's closest approach), and its transmittance in
+/// `medium` about `surface` is at most `exp(−κ [ln Φ(min(f_from, top)/σ) − ln Φ(f_to/σ)])` (the
+/// bound of `mf_track_opaque_core`). With `u` uniform in `[0, 1)` (the host's), writes the
+/// probability with which the ray is kept, `min(1, bound / 0.5)`, or 0 when it is not: its
+/// estimate is then 0, with no phase value and no tracking. A kept ray's
+/// `mf_track_transmittance` takes it as `mf_track_query::survival` and estimates `T / survival`,
+/// its own roulette (at 0.5) counting the weight, so that the estimates are those the call
+/// would have made alone, a shallow ray's costs saved. `f_to >= f_from` (a ray that does not
+/// descend) keeps the ray with probability 1. For stationary parameters only (as
+/// `mf_track_opaque_core`; with a varying field the bound does not hold: estimates stay
+/// unbiased, but may be larger). No callback is called. Errors: NaN levels, `u` outside
+/// `[0, 1)`, NULL pointers (nothing written).
+///
+/// # Safety
+/// Pointers must be NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mf_track_depth_roulette(medium: *const mf_medium, surface: *const mf_surface, f_from: f64, f_to: f64, u: f64, out_survival: *mut f64) -> mf_status {
+    struct Roulette<'a> {
+        medium: &'a mf_medium,
+        levels: (f64, f64),
+        u: f64,
+    }
+    impl SurfaceVisitor for Roulette<'_> {
+        type Output = f64;
+        fn visit<S: MeanSurface>(self, surface: &S) -> f64 {
+            let tracker = Tracker::with_bounds(&self.medium.inner, &self.medium.bounds, surface, &Constant);
+            tracker.depth_roulette(self.levels.0, self.levels.1, self.u).unwrap_or(1.0)
+        }
+    }
+    boundary(|| {
+        let (m, s) = (arg(medium, "medium")?, arg(surface, "surface")?);
+        let survival = out(out_survival, "out_survival")?;
+        if f_from.is_nan() || f_to.is_nan() {
+            return Err(Error::new(ErrorKind::InvalidArgument, format!("levels must not be NaN, got f_from {f_from}, f_to {f_to}")).into());
+        }
+        if !(0.0..1.0).contains(&u) {
+            return Err(Error::new(ErrorKind::InvalidArgument, format!("u must be in [0, 1), got {u}")).into());
+        }
+        *survival = with_surface(s, std::ptr::null_mut(), Roulette { medium: m, levels: (f_from, f_to), u });
+        Ok(())
+    })
 }
 
 /// The opaque core of `medium` about `surface` (stationary parameters; see the Rust crate's

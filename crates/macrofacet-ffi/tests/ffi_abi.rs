@@ -491,7 +491,7 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
             let origin = rng.direction() * (0.6 + 0.8 * rng.next());
             let d = rng.direction().normalize();
             let t_max = if i % 3 == 0 { f64::INFINITY } else { 2.0 * rng.next() };
-            queries.push(mf_track_query { origin: v(origin), d: v(d), t_max, seed: i * 7919 + 1, exit_level: 0.0 });
+            queries.push(mf_track_query { origin: v(origin), d: v(d), t_max, seed: i * 7919 + 1, exit_level: 0.0, survival: 0.0 });
         }
         let stats = |s: &TrackStats| mf_track_stats { surface_queries: s.surface_queries, segments: s.segments, tentative_collisions: s.tentative_collisions, majorant_violations: s.majorant_violations };
         let mut flights = vec![unsafe { std::mem::zeroed::<mf_collision>() }; queries.len()];
@@ -545,6 +545,24 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
         assert_eq!(unsafe { mf_track_opaque_core(medium, handle, &mut start, &mut level) }, mf_status::MF_OK, "{name}");
         let expected = tracker.opaque_core().map_or((-8.0 * core.height.sigma, f64::NEG_INFINITY), |c| (c.start_level, c.core_level));
         assert_eq!((start.to_bits(), level.to_bits()), (expected.0.to_bits(), expected.1.to_bits()), "{name}: opaque core");
+        // mf_track_depth_roulette and a kept ray's transmittance (mf_track_query::survival).
+        let sigma = core.height.sigma;
+        for (f_from, f_to, u) in [(0.0, -0.5 * sigma, 0.3), (sigma, -2.0 * sigma, 0.01), (-sigma, -3.0 * sigma, 1e-4), (0.0, -20.0 * sigma, 0.5), (0.0, sigma, 0.9)] {
+            let mut survival = -1.0;
+            assert_eq!(unsafe { mf_track_depth_roulette(medium, handle, f_from, f_to, u, &mut survival) }, mf_status::MF_OK, "{name}");
+            let expected = tracker.depth_roulette(f_from, f_to, u).unwrap();
+            assert_eq!(survival.to_bits(), expected.to_bits(), "{name}: depth roulette ({f_from}, {f_to}, {u})");
+            if survival > 0.0 && survival < 1.0 {
+                let (o, d) = (DVec3::new(0.0, 0.0, 1.0 + f_from), DVec3::new(1.0, 0.0, -0.2).normalize());
+                let q = mf_track_query { origin: v(o), d: v(d), t_max: f64::INFINITY, seed: 17, exit_level: 0.0, survival };
+                let d = check_direction("d", d).unwrap();
+                let mut t = unsafe { std::mem::zeroed::<mf_transmittance>() };
+                assert_eq!(unsafe { mf_track_transmittance(medium, handle, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{name}");
+                let kept = Tracker::with_bounds(core, &bounds, surface, &macrofacet::field::Constant).after_roulette(survival);
+                let tc = kept.transmittance(o, d, f64::INFINITY, &mut Pcg32::new(17, TRACK_STREAM), &mut TrackStats::default()).unwrap();
+                assert_eq!(t.transmittance.to_bits(), tc.to_bits(), "{name}: kept transmittance");
+            }
+        }
     }
 
     let mut rng = Rng(777);

@@ -15,7 +15,10 @@
 //! - otherwise (a mesh's vertex normals), `|df/ds| <= L`, and `κ = min σ(d)/L` over every
 //!   direction.
 //!
-//! The core is where `τ` reaches [`OPAQUE_DEPTH`].
+//! The core is where `τ` reaches [`OPAQUE_DEPTH`]. Shallower descents have the same bound, `τ >=
+//! κ [ln Φ(f_from/σ) − ln Φ(f_to/σ)]` ([`descent_transmittance_bound`]): a host's Russian roulette
+//! keeps such a shadow ray with that transmittance over the tracker's roulette threshold
+//! ([`crate::tracking::Tracker::depth_roulette`]), before it evaluates anything for it.
 
 use crate::height::HeightProfile;
 use crate::special::{ln_normal_cdf, probit_of_ln};
@@ -65,6 +68,24 @@ pub fn opaque_core(height: &HeightProfile, kappa: f64) -> Option<OpaqueCore> {
         x *= 1.0 + 1e-12;
     }
     None
+}
+
+/// An upper bound of the transmittance of a ray, in a stationary shell with heights `height`
+/// and the module's rate `kappa`, whose height goes from `f_from` down to `f_to` or below:
+/// `exp(−κ [ln Φ(min(f_from, top)/σ) − ln Φ(f_to/σ)])` (above the top face `ρ` is zero), 1
+/// where that interval is empty or `kappa` is not positive, 0 for `f_to = −∞`. Any larger
+/// `f_to` or smaller `f_from` gives a larger bound: callers round those ways.
+pub fn descent_transmittance_bound(height: &HeightProfile, kappa: f64, f_from: f64, f_to: f64) -> f64 {
+    if f_from.is_nan() || f_to.is_nan() {
+        return 1.0;
+    }
+    let (from, to) = (f_from.min(height.top()), f_to);
+    if !(kappa > 0.0 && to < from) {
+        return 1.0;
+    }
+    let depth = kappa * (ln_normal_cdf(from / height.sigma) - ln_normal_cdf(to / height.sigma));
+    // (ln Φ(−∞) = −∞: depth +∞, bound 0.)
+    (-depth).exp().min(1.0)
 }
 
 #[cfg(test)]

@@ -31,7 +31,7 @@ use crate::frame::Frame;
 use crate::height::HeightProfile;
 use crate::medium::MacrofacetMedium;
 use crate::ndf::{MicrofacetDistribution, Ndf, Side};
-use crate::opaque_core::{opaque_core, OpaqueCore};
+use crate::opaque_core::{descent_transmittance_bound, opaque_core, OpaqueCore};
 use crate::rng::Pcg32;
 use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
 use glam::DVec3;
@@ -140,7 +140,7 @@ const SKIP_SIGMAS: f64 = 0.5;
 /// 32 spp) was 0.005221 against 0.005232 (1: 0.005256), of the fuzzy sphere (96², 64 spp)
 /// 0.000633 at 0.1, 0.3 and 0.5 (1: 0.000635). Shadow rays in these scenes mostly pass the
 /// shell or end in an opaque interior; the path's other sampling dominates the noise.
-const ROULETTE_THRESHOLD: f64 = 0.5;
+pub const ROULETTE_THRESHOLD: f64 = 0.5;
 /// Relative slack of the majorant check (rounding of `f` and of the projected area).
 const VIOLATION_SLACK: f64 = 1e-9;
 
@@ -165,6 +165,9 @@ pub struct ProjectedAreaBounds {
     /// table whose level `j` holds, at `k`, the extremes of cells `k..k + 2^j` (where they exist),
     /// so that any range of cells is the union of two entries of one level.
     cells: Option<Box<[[AreaCell; AREA_CELLS]]>>,
+    /// [`Self::descent_rate`] for frames that are not, and that are, the gradient's (built with
+    /// the cells, from them: a host asks per shadow ray).
+    descent_rates: Option<[f64; 2]>,
 }
 
 /// Cells of `d·n ∈ [−1, 1]` in [`ProjectedAreaBounds::of`] (8 bytes each, in each of the
@@ -262,13 +265,40 @@ impl ProjectedAreaBounds {
             }
         }
         bounds.cells = Some(table);
+        bounds.descent_rates = Some([false, true].map(|gradient| bounds.descent_rate(gradient)));
         bounds
     }
 
     /// Without cells: for bounds built per call or per segment.
     fn new(ndf: &Ndf) -> Self {
         let (upper, lower) = ndf.isotropic_envelope();
-        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf, isotropic: ndf.is_isotropic(), cells: None }
+        ProjectedAreaBounds { upper, lower, lipschitz: upper.projected_area_lipschitz(), source: *ndf, isotropic: ndf.is_isotropic(), cells: None, descent_rates: None }
+    }
+
+    /// The opaque core's `κ` before the division by the surface's Lipschitz constant
+    /// ([`crate::opaque_core`]): a lower bound of `σ(d)/|d·n|` over descending directions where
+    /// the frame normal is the gradient's direction (`gradient`), else of `σ(d)` over every
+    /// direction. From the area's lower bounds over [`CORE_PIECES`] pieces of `d·n` (one bound
+    /// over a wide range pairs its ends' extremes: for Beckmann the grazing `w_z` with the spread
+    /// of normal incidence, 0). Where the frame is the gradient, over `|d·n| ∈ [q^(k+1), q^k]`
+    /// (the last piece down to 0) divided by the piece's largest `|d·n|`: geometric pieces keep
+    /// that quotient within `q` of `σ/|d·n|` for smooth lobes, whose `σ` tends to `|d·n|`.
+    /// Otherwise over even pieces of `[−1, 1]`.
+    fn descent_rate(&self, gradient: bool) -> f64 {
+        if let Some(rates) = self.descent_rates {
+            return rates[usize::from(gradient)];
+        }
+        if gradient {
+            (0..CORE_PIECES)
+                .map(|k| {
+                    let (large, small) = (CORE_RATIO.powi(k as i32), if k + 1 == CORE_PIECES { 0.0 } else { CORE_RATIO.powi(k as i32 + 1) });
+                    self.lower([-large, -small]) / large
+                })
+                .fold(f64::INFINITY, f64::min)
+        } else {
+            let step = 2.0 / CORE_PIECES as f64;
+            (0..CORE_PIECES).map(|k| self.lower([-1.0 + k as f64 * step, -1.0 + (k + 1) as f64 * step])).fold(f64::INFINITY, f64::min)
+        }
     }
 
     /// The cells' bound of `side` over `cos` when every cell it meets is tight. A range within
@@ -398,6 +428,8 @@ pub struct Tracker<'a, S: MeanSurface, F: MediumField = Constant> {
     region: HeightProfile,
     /// Whether a collision's uv is completed ([`Self::without_uv`]).
     complete_uv: bool,
+    /// The probability with which the caller kept its shadow rays ([`Self::after_roulette`]).
+    survival: f64,
 }
 
 /// A tracker's projected-area bounds: the host's, or its own (boxed: a tracker is built per
@@ -472,7 +504,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     fn assemble(medium: &'a MacrofacetMedium, area: Area<'a>, surface: &'a S, field: &'a F) -> Self {
         let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
         // (The area's distribution is the medium's: `with_bounds` checks it.)
-        Tracker { medium, surface, field, isotropic: area.get().isotropic, area, region, complete_uv: true }
+        Tracker { medium, surface, field, isotropic: area.get().isotropic, area, region, complete_uv: true, survival: 1.0 }
     }
 
     /// A tracker whose collisions keep the uv the tracker's queries gave (possibly none) instead
@@ -483,6 +515,16 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         self
     }
 
+    /// A tracker for shadow rays the caller kept with probability `survival` in `(0, 1]` in a
+    /// Russian roulette of its own ([`Self::depth_roulette`]): its transmittance estimates are of
+    /// `T / survival`, and its own roulette counts that weight (the same estimates as without the
+    /// caller's roulette, where the bound lies below [`ROULETTE_THRESHOLD`]). Free flights are
+    /// not affected.
+    pub fn after_roulette(mut self, survival: f64) -> Self {
+        self.survival = survival;
+        self
+    }
+
     fn height(&self) -> &HeightProfile {
         &self.region
     }
@@ -490,28 +532,29 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// The opaque core of this medium about this surface ([`crate::opaque_core`]): for a
     /// stationary medium only (`None` with a varying field, whose bounds hold per segment).
     pub fn opaque_core(&self) -> Option<OpaqueCore> {
+        opaque_core(&self.medium.height, self.descent_rate()?)
+    }
+
+    /// `κ` of [`crate::opaque_core`] for this medium about this surface (`σ(d) ds >= κ |df|`
+    /// wherever a ray descends): for a stationary medium only (`None` with a varying field).
+    /// Cheap with bounds built once ([`ProjectedAreaBounds::of`], [`Self::with_bounds`]).
+    pub fn descent_rate(&self) -> Option<f64> {
         if self.field.varies() {
             return None;
         }
-        // κ from the area's lower bounds over CORE_PIECES pieces of d·n (one bound over a wide
-        // range pairs its ends' extremes: for Beckmann the grazing w_z with the spread of normal
-        // incidence, 0). Where the frame is the gradient, over |d·n| ∈ [q^(k+1), q^k] (the last
-        // piece down to 0) divided by the piece's largest |d·n|: geometric pieces keep that
-        // quotient within q of σ/|d·n| for smooth lobes, whose σ tends to |d·n|. Otherwise over
-        // even pieces of [−1, 1].
-        let area = self.area.get();
-        let rate = if self.surface.normal_is_gradient() {
-            (0..CORE_PIECES)
-                .map(|k| {
-                    let (large, small) = (CORE_RATIO.powi(k as i32), if k + 1 == CORE_PIECES { 0.0 } else { CORE_RATIO.powi(k as i32 + 1) });
-                    area.lower([-large, -small]) / large
-                })
-                .fold(f64::INFINITY, f64::min)
-        } else {
-            let step = 2.0 / CORE_PIECES as f64;
-            (0..CORE_PIECES).map(|k| area.lower([-1.0 + k as f64 * step, -1.0 + (k + 1) as f64 * step])).fold(f64::INFINITY, f64::min)
-        };
-        opaque_core(&self.medium.height, rate / self.surface.lipschitz())
+        Some(self.area.get().descent_rate(self.surface.normal_is_gradient()) / self.surface.lipschitz())
+    }
+
+    /// The caller's Russian roulette on a shadow ray that descends from height `f_from` to
+    /// `f_to` (conservatively: at most the start's height, at least the deepest the ray
+    /// reaches), before it evaluates anything for it: with `u` uniform in `[0, 1)`, the
+    /// probability with which the ray is kept ([`roulette_survival`] of
+    /// [`descent_transmittance_bound`]), or 0 when it is not (its estimate is 0). A kept ray's
+    /// estimate is then [`Self::after_roulette`]'s. `None` as [`Self::descent_rate`].
+    pub fn depth_roulette(&self, f_from: f64, f_to: f64, u: f64) -> Option<f64> {
+        let bound = descent_transmittance_bound(&self.medium.height, self.descent_rate()?, f_from, f_to);
+        let survival = roulette_survival(bound);
+        Some(if u < survival { survival } else { 0.0 })
     }
 
     /// The medium at a point: the field's local parameters (none for a stationary medium).
@@ -1001,7 +1044,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         let mut t = t_enter;
         let mut p = ray_point(origin, t, d)?;
         let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;
-        let mut transmittance = 1.0;
+        let mut transmittance = 1.0 / self.survival;
         let mut previous = Previous::None;
         let mut budget = 0u64;
         // Segments that start at a residual tentative collision spend the tentative budget.
@@ -1115,6 +1158,19 @@ fn ray_point(p: DVec3, s: f64, d: DVec3) -> Result<DVec3> {
 #[inline(never)]
 fn beyond_f64(p: DVec3, s: f64, d: DVec3) -> Error {
     Error::new(ErrorKind::InvalidArgument, format!("the ray from {p} along {d} leaves the range of f64 at {s:e} from there: no point beyond can be represented"))
+}
+
+/// The probability with which a caller keeps a shadow ray whose transmittance is at most
+/// `bound` before tracking it: `bound / `[`ROULETTE_THRESHOLD`] below the threshold, else 1 (a
+/// NaN bound keeps it). The tracker's roulette would end such a ray with at least the same
+/// probability once its estimate fell below the threshold; the caller's ends it before
+/// anything is evaluated ([`Tracker::depth_roulette`], [`Tracker::after_roulette`]).
+pub fn roulette_survival(bound: f64) -> f64 {
+    if bound < ROULETTE_THRESHOLD {
+        (bound / ROULETTE_THRESHOLD).max(0.0)
+    } else {
+        1.0
+    }
 }
 
 /// Russian roulette on a transmittance estimate below [`ROULETTE_THRESHOLD`]: survives with

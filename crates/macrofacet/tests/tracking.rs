@@ -1205,6 +1205,16 @@ fn optical_depth_to<S: MeanSurface>(tracker: &Tracker<S>, surface: &S, sigma: f6
         .sum()
 }
 
+/// Thin shells of three distributions and a fuzzy one: the media of the opaque core's tests.
+fn core_media() -> [(&'static str, MacrofacetMedium); 4] {
+    [
+        ("thin Beckmann", medium(Ndf::Beckmann(Beckmann { alpha_u: 0.3, alpha_v: 0.3 }), 1e-3)),
+        ("thin anisotropic Beckmann", medium(Ndf::Beckmann(Beckmann { alpha_u: 0.05, alpha_v: 0.4 }), 1e-3)),
+        ("thin GGX", medium(Ndf::Ggx(macrofacet::ndf::Ggx::new(0.1, 0.1).unwrap()), 1e-3)),
+        ("fuzzy gpss", medium(Ndf::Gpss(Gpss { alpha_x: 0.5, alpha_y: 0.5, alpha_z: 0.5 }), 0.02)),
+    ]
+}
+
 /// The opaque core (`macrofacet::opaque_core`): from the start level and from above the shell, at
 /// angles from the radial ray down to rays that barely reach the core, the exact optical depth
 /// to the core's first point is at least `OPAQUE_DEPTH` (the radial ray's little more: the
@@ -1221,12 +1231,7 @@ fn an_opaque_core_is_opaque() {
         None::<&[DVec2]>,
     )
     .unwrap();
-    let media = [
-        ("thin Beckmann", medium(Ndf::Beckmann(Beckmann { alpha_u: 0.3, alpha_v: 0.3 }), 1e-3)),
-        ("thin anisotropic Beckmann", medium(Ndf::Beckmann(Beckmann { alpha_u: 0.05, alpha_v: 0.4 }), 1e-3)),
-        ("thin GGX", medium(Ndf::Ggx(macrofacet::ndf::Ggx::new(0.1, 0.1).unwrap()), 1e-3)),
-        ("fuzzy gpss", medium(Ndf::Gpss(Gpss { alpha_x: 0.5, alpha_y: 0.5, alpha_z: 0.5 }), 0.02)),
-    ];
+    let media = core_media();
     for (label, m) in &media {
         let tracker = Tracker::new(m, &sphere);
         let core = tracker.opaque_core().unwrap();
@@ -1259,4 +1264,90 @@ fn an_opaque_core_is_opaque() {
         let field = TestField { sigma: [0.5 * sigma, sigma], alpha: [0.3, 0.3], anisotropy: None, understate: false };
         assert_eq!(Tracker::with_field(m, &sphere, &field).opaque_core(), None, "{label}: a varying field");
     }
+}
+
+/// The depth roulette's bound (`macrofacet::opaque_core::descent_transmittance_bound`) on spheres
+/// of radius 10σ to 1000σ: from heights across the shell (and above it), at angles from
+/// grazing to radial, the exact transmittance to the chord's deepest point (and to its end,
+/// past which a ray only climbs) is at most the bound, and within a few times it on the radial ray
+/// (the bound is tight there).
+#[test]
+fn the_depth_roulettes_bound_holds() {
+    use macrofacet::opaque_core::descent_transmittance_bound;
+    let media = core_media();
+    for (label, m) in &media {
+        let sigma = m.height.sigma;
+        for r in [10.0 * sigma, 100.0 * sigma, 1000.0 * sigma] {
+            let sphere = Sphere::new(DVec3::ZERO, r, false, DVec3::Z).unwrap();
+            let tracker = Tracker::new(m, &sphere);
+            let kappa = tracker.descent_rate().unwrap();
+            assert!(kappa > 0.5 && kappa <= 1.0, "{label}: rate {kappa}");
+            for f0 in [-3.0 * sigma, 0.0, 1.5 * sigma, m.height.top() + sigma] {
+                let o = DVec3::new(0.0, 0.0, r + f0);
+                for beta in [0.02, 0.1, 0.3, 0.7, 1.5707963] {
+                    let d = DVec3::new(f64::cos(beta), 0.0, -f64::sin(beta));
+                    let s = -o.dot(d);
+                    let f_deepest = (o + s * d).length() - r;
+                    let bound = descent_transmittance_bound(&m.height, kappa, f0, f_deepest);
+                    for t_end in [s, 2.0 * s] {
+                        let exact = (-optical_depth_to(&tracker, &sphere, sigma, o, d, t_end)).exp();
+                        assert!(exact <= bound * (1.0 + 1e-6), "{label}, r = {r}: from f = {f0} at {beta} below the tangent to t = {t_end}: T = {exact:e} > bound {bound:e}");
+                        if beta > 1.5 && f0 == 0.0 && t_end == s && bound > 1e-300 {
+                            assert!(exact >= bound.powf(1.0 / kappa) * 1e-3, "{label}, r = {r}: the radial T = {exact:e} far below the bound {bound:e}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A caller's depth roulette (`Tracker::depth_roulette`, `Tracker::after_roulette`) keeps the
+/// transmittance estimates unbiased: over rays that descend into a thin shell at a range of
+/// depths, the mean of the roulette's estimates (0 for rays not kept) matches the exact
+/// transmittance and the tracker's plain estimates, every kept estimate is at most
+/// `1/survival`, and the roulette ends the deep rays without tracking them.
+#[test]
+fn a_depth_roulette_keeps_transmittance_unbiased() {
+    use macrofacet::tracking::roulette_survival;
+    let m = medium(Ndf::Beckmann(Beckmann { alpha_u: 0.3, alpha_v: 0.3 }), 1e-3);
+    let sigma = m.height.sigma;
+    let r = 100.0 * sigma;
+    let sphere = Sphere::new(DVec3::ZERO, r, false, DVec3::Z).unwrap();
+    let tracker = Tracker::new(&m, &sphere);
+    let mut rng = Pcg32::new(2026, 12);
+    let n = 20_000;
+    let mut killed = 0;
+    for beta in [0.01, 0.05, 0.12, 0.18, 0.22, 0.3] {
+        let o = DVec3::new(0.0, 0.0, r);
+        let d = DVec3::new(f64::cos(beta), 0.0, -f64::sin(beta));
+        let s = -o.dot(d);
+        let f_deepest = (o + s * d).length() - r;
+        let exact = (-optical_depth_to(&tracker, &sphere, sigma, o, d, 2.0 * s)).exp();
+        let (mut roulette, mut plain) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for _ in 0..n {
+            let survival = tracker.depth_roulette(0.0, f_deepest, rng.next_f64()).unwrap();
+            assert!(survival == 0.0 || (survival > 0.0 && survival <= 1.0), "survival {survival}");
+            roulette.push(if survival > 0.0 {
+                let kept = Tracker::new(&m, &sphere).after_roulette(survival);
+                let t = kept.transmittance(o, d, 2.0 * s, &mut rng, &mut TrackStats::default()).unwrap();
+                assert!((0.0..=1.0 / survival).contains(&t), "estimate {t} kept with {survival}");
+                t
+            } else {
+                killed += 1;
+                0.0
+            });
+            plain.push(tracker.transmittance(o, d, 2.0 * s, &mut rng, &mut TrackStats::default()).unwrap());
+        }
+        let (a, b) = (mean_and_standard_error(roulette.into_iter()), mean_and_standard_error(plain.into_iter()));
+        // (Estimates near 0.5 once a roulette has played: a standard error of at least
+        // sqrt(T/2n) even where no sample happened to be nonzero.)
+        let tolerance = |se: f64| 4.0 * se.max((0.5 * exact / n as f64).sqrt());
+        assert!((a.0 - exact).abs() <= tolerance(a.1), "{beta} below the tangent: roulette {a:?} against the exact {exact:e}");
+        assert!((b.0 - exact).abs() <= tolerance(b.1), "{beta} below the tangent: plain {b:?} against the exact {exact:e}");
+    }
+    assert!(killed > n, "the roulette ended only {killed} rays");
+    assert_eq!(roulette_survival(0.25), 0.5);
+    assert_eq!(roulette_survival(0.9), 1.0);
+    assert_eq!(roulette_survival(f64::NAN), 1.0);
 }

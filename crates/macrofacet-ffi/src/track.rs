@@ -168,12 +168,12 @@ impl SurfaceVisitor for Call<'_> {
         match self.field {
             // The collision reports no uv: the tracker need not complete it.
             None => {
-                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv().after_roulette(self.ray.survival);
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv().after_roulette(self.ray.survival)?;
                 run(self.out, self.ray, self.seed, &tracker)
             }
             Some(field) => {
                 let field = CallbackField::new(field, self.user_data);
-                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv().after_roulette(self.ray.survival);
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv().after_roulette(self.ray.survival)?;
                 run(self.out, self.ray, self.seed, &tracker)
             }
         }

@@ -558,7 +558,7 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
                 let d = check_direction("d", d).unwrap();
                 let mut t = unsafe { std::mem::zeroed::<mf_transmittance>() };
                 assert_eq!(unsafe { mf_track_transmittance(medium, handle, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{name}");
-                let kept = Tracker::with_bounds(core, &bounds, surface, &macrofacet::field::Constant).after_roulette(survival);
+                let kept = Tracker::with_bounds(core, &bounds, surface, &macrofacet::field::Constant).after_roulette(survival).unwrap();
                 let tc = kept.transmittance(o, d, f64::INFINITY, &mut Pcg32::new(17, TRACK_STREAM), &mut TrackStats::default()).unwrap();
                 assert_eq!(t.transmittance.to_bits(), tc.to_bits(), "{name}: kept transmittance");
             }

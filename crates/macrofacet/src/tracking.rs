@@ -519,10 +519,13 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// Russian roulette of its own ([`Self::depth_roulette`]): its transmittance estimates are of
     /// `T / survival`, and its own roulette counts that weight (the same estimates as without the
     /// caller's roulette, where the bound lies below [`ROULETTE_THRESHOLD`]). Free flights are
-    /// not affected.
-    pub fn after_roulette(mut self, survival: f64) -> Self {
+    /// not affected. Errors: a survival outside `(0, 1]`.
+    pub fn after_roulette(mut self, survival: f64) -> Result<Self> {
+        if !(survival > 0.0 && survival <= 1.0) {
+            return Err(Error::new(ErrorKind::InvalidArgument, format!("a roulette's survival must be in (0, 1], got {survival}")));
+        }
         self.survival = survival;
-        self
+        Ok(self)
     }
 
     fn height(&self) -> &HeightProfile {

@@ -1329,7 +1329,7 @@ fn a_depth_roulette_keeps_transmittance_unbiased() {
             let survival = tracker.depth_roulette(0.0, f_deepest, rng.next_f64()).unwrap();
             assert!(survival == 0.0 || (survival > 0.0 && survival <= 1.0), "survival {survival}");
             roulette.push(if survival > 0.0 {
-                let kept = Tracker::new(&m, &sphere).after_roulette(survival);
+                let kept = Tracker::new(&m, &sphere).after_roulette(survival).unwrap();
                 let t = kept.transmittance(o, d, 2.0 * s, &mut rng, &mut TrackStats::default()).unwrap();
                 assert!((0.0..=1.0 / survival).contains(&t), "estimate {t} kept with {survival}");
                 t
@@ -1347,6 +1347,9 @@ fn a_depth_roulette_keeps_transmittance_unbiased() {
         assert!((b.0 - exact).abs() <= tolerance(b.1), "{beta} below the tangent: plain {b:?} against the exact {exact:e}");
     }
     assert!(killed > n, "the roulette ended only {killed} rays");
+    for bad in [0.0, -0.5, 1.5, f64::NAN, f64::INFINITY] {
+        assert!(Tracker::new(&m, &sphere).after_roulette(bad).is_err(), "survival {bad} taken");
+    }
     assert_eq!(roulette_survival(0.25), 0.5);
     assert_eq!(roulette_survival(0.9), 1.0);
     assert_eq!(roulette_survival(f64::NAN), 1.0);

@@ -94,6 +94,12 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
 
 Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium,
                                          Sampler& sampler) const {
+    // (Without opaque cores, the weight is a constant the compiler folds away.)
+    if (scene_.integrator.volumetric && scene_.has_opaque_cores()) {
+        const Scene::ShadowRoulette kept = scene_.next_event_roulette(o, d, dist, sampler);
+        if (!(kept.survival > 0)) return Rgb(0.0f);
+        return shadow_transmittance(o, d, dist, medium, sampler, kept, [] { return true; });
+    }
     return shadow_transmittance(o, d, dist, medium, sampler, Scene::ShadowRoulette{}, [] { return true; });
 }
 
@@ -147,17 +153,12 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         if (!emitters[idx]->sample_li(ref, u, &es)) return Rgb(0.0f);
         if (es.Li.is_black() || !(es.pdf > 0) || (!es.delta && !nee_non_delta)) return Rgb(0.0f);
         float dist = std::isfinite(es.dist) ? es.dist * (1.0f - 1e-4f) : kInf;
-        // A shell's opaque core ends the shadow ray with a transmittance that rounds to 0: no
-        // value, no tracking (a collision's light from inside the sphere, a floor's through it).
-        if (vol && scene_.blocked_by_opaque_core(origin, es.wi, dist)) return Rgb(0.0f);
-        // A ray into a shell's interior whose transmittance is bound to be small is kept with a
-        // probability of that bound over the library's roulette threshold (0.5): the estimates
-        // its tracking would make, a shallow ray's evaluations saved.
-        const Scene::ShadowRoulette kept = vol ? scene_.shadow_roulette(origin, es.wi, dist, sampler) : Scene::ShadowRoulette{};
-        if (!(kept.survival > 0)) return Rgb(0.0f);
-        // The phase value after the shadow ray's first cast, before any tracking: a ray that
+        // A shell's opaque core and its depth roulette first (Scene::next_event_roulette); then
+        // the phase value after the shadow ray's first cast, before any tracking: a ray that
         // meets an opaque surface at once (towards the floor under a sphere) needs neither, and
         // a value of 0 (often, below a height-field shell's tangent plane) spares the tracking.
+        const Scene::ShadowRoulette kept = vol && scene_.has_opaque_cores() ? scene_.next_event_roulette(origin, es.wi, dist, sampler) : Scene::ShadowRoulette{};
+        if (!(kept.survival > 0)) return Rgb(0.0f);
         float f_pdf = 0.0f;
         Rgb f(0.0f);
         Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler, kept, [&] {

@@ -18,7 +18,9 @@ public:
     explicit PathIntegrator(const Scene& scene) : scene_(scene) {}
     /// Radiance along a primary ray starting in `medium`.
     Rgb Li(Ray ray, const Medium* medium, Sampler& sampler) const;
-    /// Transmittance from `o` along unit `d` over `dist` (may be inf), crossing null surfaces.
+    /// A next-event estimate's transmittance from `o` along unit `d` over `dist` (may be inf),
+    /// crossing null surfaces; a shell's opaque core and depth roulette first
+    /// (Scene::next_event_roulette).
     Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, Sampler& sampler) const;
 
 private:

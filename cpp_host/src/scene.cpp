@@ -179,6 +179,11 @@ bool Scene::blocked_by_opaque_core(const Vec3& o, const Vec3& d, float dist) con
     return false;
 }
 
+Scene::ShadowRoulette Scene::next_event_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const {
+    if (blocked_by_opaque_core(o, d, dist)) return ShadowRoulette{0.0, nullptr};
+    return shadow_roulette(o, d, dist, sampler);
+}
+
 void Scene::add_emitter(std::shared_ptr<Emitter> e) {
     if (e->is_infinite()) infinite_.push_back(e.get());
     emitters_.push_back(std::move(e));

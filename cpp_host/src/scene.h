@@ -115,6 +115,7 @@ public:
     /// it: a shadow ray that needs neither its phase or BSDF value nor tracking (its estimate
     /// would be 0). A few dozen instructions per core.
     bool blocked_by_opaque_core(const Vec3& o, const Vec3& d, float dist) const;
+    bool has_opaque_cores() const { return !cores_.empty(); }
     /// The depth roulette of a shadow ray o + s d, s in [0, dist) (mf_track_depth_roulette): the
     /// ray descends into the first shell with a core from its height at o to its chord's deepest
     /// point, which bounds its transmittance there. `survival` is the probability with which it
@@ -125,6 +126,9 @@ public:
         const Medium* medium = nullptr;
     };
     ShadowRoulette shadow_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const;
+    /// What the opaque cores say of a next-event ray, before anything is evaluated for it:
+    /// survival 0 where it meets a core (blocked_by_opaque_core), else shadow_roulette's.
+    ShadowRoulette next_event_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const;
     const Aabb& bounds() const { return bounds_; }
     SceneSummary summary() const;
 

@@ -641,6 +641,9 @@ TEST_CASE(opaque_cores) {
             kept += steep.survival > 0;
         }
         CHECK_MSG(cores ? kept <= 2 : kept == 200, "kept " + std::to_string(kept));
+        // Both verdicts at once, for a next-event ray: a core in the way ends it.
+        CHECK(scene->next_event_roulette(Vec3(0, 0, above), Vec3(0, 0, -1), inf, sampler).survival == (cores ? 0.0 : 1.0));
+        CHECK(scene->next_event_roulette(top, Vec3(0.6f, 0.0f, 0.8f), inf, sampler).survival == 1.0);
     }
     expect_same_image(work("cores.xml"), "--no-opaque-cores", "opaque_cores");
 }

@@ -157,7 +157,9 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         // the phase value after the shadow ray's first cast, before any tracking: a ray that
         // meets an opaque surface at once (towards the floor under a sphere) needs neither, and
         // a value of 0 (often, below a height-field shell's tangent plane) spares the tracking.
-        const Scene::ShadowRoulette kept = vol && scene_.has_opaque_cores() ? scene_.next_event_roulette(origin, es.wi, dist, sampler) : Scene::ShadowRoulette{};
+        const Scene::ShadowRoulette kept = vol && scene_.has_opaque_cores()
+                                               ? scene_.next_event_roulette(origin, es.wi, dist, sampler)
+                                               : Scene::ShadowRoulette{};
         if (!(kept.survival > 0)) return Rgb(0.0f);
         float f_pdf = 0.0f;
         Rgb f(0.0f);

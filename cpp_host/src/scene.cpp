@@ -141,7 +141,7 @@ void Scene::add_opaque_core(const Vec3& center, double radius, double start_leve
     // far beyond the rounding of a chord in double precision (~1e-15 r).
     const double margin = 1e-6 * radius, core = radius + core_level - margin, start = radius + start_level + margin;
     if (!(core > 0) || !(start > core)) return;  // (a core deeper than the centre: none)
-    cores_.push_back(OpaqueCore{center.x, center.y, center.z, start * start, core * core, radius, medium});
+    cores_.push_back(OpaqueCore{center.x, center.y, center.z, start * start, core * core, radius, medium->shell_top(), medium});
 }
 
 Scene::ShadowRoulette Scene::shadow_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const {
@@ -158,7 +158,8 @@ Scene::ShadowRoulette Scene::shadow_roulette(const Vec3& o, const Vec3& d, float
         // opaque cores' margin, far beyond the rounding of doubles.
         const double margin = 1e-6 * c.radius;
         const double f_from = std::sqrt(oo) - c.radius - margin, f_to = std::sqrt(deepest2) - c.radius + margin;
-        if (!(f_to < f_from)) continue;
+        // (Above the shell's top all along, or not descending: nothing to bound.)
+        if (!(f_to < f_from && f_to < c.top)) continue;
         return ShadowRoulette{c.medium->depth_roulette(f_from, f_to, double(sampler.next_1d())), c.medium};
     }
     return ShadowRoulette{};

@@ -160,7 +160,7 @@ private:
     std::vector<SuperposedMedium> superposed_;
     /// add_opaque_core: squared radii, each with a margin for the chord's rounding.
     struct OpaqueCore {
-        double cx, cy, cz, start_radius2, core_radius2, radius;
+        double cx, cy, cz, start_radius2, core_radius2, radius, top;
         const MacrofacetMedium* medium;
     };
     std::vector<OpaqueCore> cores_;

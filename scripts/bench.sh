@@ -32,7 +32,9 @@ if [ "$mode" = "--instructions" ]; then
     build_mfrender
     instructions() {  # ARGS...: instructions of PathIntegrator::Li and everything it calls, 1 thread
         rm -f "$out/cg.out"
-        if ! valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" --toggle-collect='*PathIntegrator::Li*' \
+        # Li itself only: a function whose name contains Li's (a lambda of Li, or a template
+        # instantiated with one) would toggle the collection off again on entry.
+        if ! valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" --toggle-collect='mf::PathIntegrator::Li(mf::Ray, mf::Medium const?, mf::Sampler&) const' \
             "$mfrender" "$@" --threads 1 --quiet -o "$out/cg.exr" >"$out/cg.log" 2>&1; then
             echo "scripts/bench.sh: mfrender $* failed under callgrind:" >&2
             grep -v "^==" "$out/cg.log" | tail -n 5 >&2

@@ -1165,9 +1165,9 @@ fn beyond_f64(p: DVec3, s: f64, d: DVec3) -> Error {
 
 /// The probability with which a caller keeps a shadow ray whose transmittance is at most
 /// `bound` before tracking it: `bound / `[`ROULETTE_THRESHOLD`] below the threshold, else 1 (a
-/// NaN bound keeps it). The tracker's roulette would end such a ray with at least the same
-/// probability once its estimate fell below the threshold; the caller's ends it before
-/// anything is evaluated ([`Tracker::depth_roulette`], [`Tracker::after_roulette`]).
+/// NaN bound keeps it). The tracker's own roulette plays at the same threshold once its
+/// estimate falls below it; the caller's plays before anything is evaluated for the ray
+/// ([`Tracker::depth_roulette`], [`Tracker::after_roulette`]).
 pub fn roulette_survival(bound: f64) -> f64 {
     if bound < ROULETTE_THRESHOLD {
         (bound / ROULETTE_THRESHOLD).max(0.0)

@@ -144,45 +144,62 @@ void Scene::add_opaque_core(const Vec3& center, double radius, double start_leve
     cores_.push_back(OpaqueCore{center.x, center.y, center.z, start * start, core * core, radius, medium->shell_top(), medium});
 }
 
+Scene::CoreChord Scene::chord_of(const OpaqueCore& c, const Vec3& o, const Vec3& d) {
+    const double ox = double(o.x) - c.cx, oy = double(o.y) - c.cy, oz = double(o.z) - c.cz;
+    return CoreChord{ox * ox + oy * oy + oz * oz, ox * d.x + oy * d.y + oz * d.z,
+                     double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z};
+}
+
+bool Scene::blocks(const OpaqueCore& c, const CoreChord& ray, float dist) {
+    // From above the start level (so outside the core), heading towards the centre.
+    if (!(ray.oo >= c.start_radius2) || !(ray.b < 0)) return false;
+    const double disc = ray.b * ray.b - ray.dd * (ray.oo - c.core_radius2);
+    if (!(disc > 0)) return false;
+    return (-ray.b - std::sqrt(disc)) / ray.dd < double(dist);  // the entry (-b > 0: no cancellation)
+}
+
+bool Scene::descends(const OpaqueCore& c, const CoreChord& ray, float dist, double* f_from, double* f_to) {
+    if (!(ray.b < 0)) return false;  // moving away from the centre: the height only grows
+    // The chord's deepest point: its closest approach to the centre, or its end.
+    const double s = std::min(-ray.b / ray.dd, double(dist));
+    const double deepest2 = std::max(0.0, ray.oo + s * (2 * ray.b + s * ray.dd));
+    // Heights rounded the bound's safe ways (the start down, the deepest point up) by the
+    // opaque cores' margin, far beyond the rounding of doubles.
+    const double margin = 1e-6 * c.radius;
+    *f_from = std::sqrt(ray.oo) - c.radius - margin;
+    *f_to = std::sqrt(deepest2) - c.radius + margin;
+    // (Above the shell's top all along, or not descending: nothing to bound.)
+    return *f_to < *f_from && *f_to < c.top;
+}
+
+Scene::ShadowRoulette Scene::roulette(const OpaqueCore& c, double f_from, double f_to, Sampler& sampler) {
+    return ShadowRoulette{c.medium->depth_roulette(f_from, f_to, double(sampler.next_1d())), c.medium};
+}
+
 Scene::ShadowRoulette Scene::shadow_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const {
-    for (const OpaqueCore& c : cores_) {
-        const double ox = double(o.x) - c.cx, oy = double(o.y) - c.cy, oz = double(o.z) - c.cz;
-        const double b = ox * d.x + oy * d.y + oz * d.z;
-        if (!(b < 0)) continue;  // moving away from the centre: the height only grows
-        const double dd = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
-        const double oo = ox * ox + oy * oy + oz * oz;
-        // The chord's deepest point: its closest approach to the centre, or its end.
-        const double s = std::min(-b / dd, double(dist));
-        const double deepest2 = std::max(0.0, oo + s * (2 * b + s * dd));
-        // Heights rounded the bound's safe ways (the start down, the deepest point up) by the
-        // opaque cores' margin, far beyond the rounding of doubles.
-        const double margin = 1e-6 * c.radius;
-        const double f_from = std::sqrt(oo) - c.radius - margin, f_to = std::sqrt(deepest2) - c.radius + margin;
-        // (Above the shell's top all along, or not descending: nothing to bound.)
-        if (!(f_to < f_from && f_to < c.top)) continue;
-        return ShadowRoulette{c.medium->depth_roulette(f_from, f_to, double(sampler.next_1d())), c.medium};
-    }
+    double f_from, f_to;
+    for (const OpaqueCore& c : cores_)
+        if (descends(c, chord_of(c, o, d), dist, &f_from, &f_to)) return roulette(c, f_from, f_to, sampler);
     return ShadowRoulette{};
 }
 
 bool Scene::blocked_by_opaque_core(const Vec3& o, const Vec3& d, float dist) const {
-    for (const OpaqueCore& c : cores_) {
-        const double ox = double(o.x) - c.cx, oy = double(o.y) - c.cy, oz = double(o.z) - c.cz;
-        const double oo = ox * ox + oy * oy + oz * oz;
-        const double b = ox * d.x + oy * d.y + oz * d.z;
-        // From above the start level (so outside the core), heading towards the centre.
-        if (!(oo >= c.start_radius2) || !(b < 0)) continue;
-        const double dd = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
-        const double disc = b * b - dd * (oo - c.core_radius2);
-        if (!(disc > 0)) continue;
-        if ((-b - std::sqrt(disc)) / dd < double(dist)) return true;  // the entry (-b > 0: no cancellation)
-    }
+    for (const OpaqueCore& c : cores_)
+        if (blocks(c, chord_of(c, o, d), dist)) return true;
     return false;
 }
 
 Scene::ShadowRoulette Scene::next_event_roulette(const Vec3& o, const Vec3& d, float dist, Sampler& sampler) const {
-    if (blocked_by_opaque_core(o, d, dist)) return ShadowRoulette{0.0, nullptr};
-    return shadow_roulette(o, d, dist, sampler);
+    // One chord per core for both tests: any core in the way ends the ray; else the first shell
+    // it descends into plays the roulette.
+    const OpaqueCore* first = nullptr;
+    double f_from = 0, f_to = 0;
+    for (const OpaqueCore& c : cores_) {
+        const CoreChord ray = chord_of(c, o, d);
+        if (blocks(c, ray, dist)) return ShadowRoulette{0.0, nullptr};
+        if (!first && descends(c, ray, dist, &f_from, &f_to)) first = &c;
+    }
+    return first ? roulette(*first, f_from, f_to, sampler) : ShadowRoulette{};
 }
 
 void Scene::add_emitter(std::shared_ptr<Emitter> e) {

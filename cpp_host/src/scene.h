@@ -164,6 +164,16 @@ private:
         const MacrofacetMedium* medium;
     };
     std::vector<OpaqueCore> cores_;
+    /// A ray o + s d seen from a core's centre c: |o − c|², (o − c)·d and d·d.
+    struct CoreChord {
+        double oo, b, dd;
+    };
+    static CoreChord chord_of(const OpaqueCore& c, const Vec3& o, const Vec3& d);
+    /// blocked_by_opaque_core for one core.
+    static bool blocks(const OpaqueCore& c, const CoreChord& ray, float dist);
+    /// shadow_roulette's levels for one core: false when the ray does not descend into its shell.
+    static bool descends(const OpaqueCore& c, const CoreChord& ray, float dist, double* f_from, double* f_to);
+    static ShadowRoulette roulette(const OpaqueCore& c, double f_from, double f_to, Sampler& sampler);
     Aabb bounds_;
 };
 

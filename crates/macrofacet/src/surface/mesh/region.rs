@@ -20,7 +20,7 @@
 //! exactly and the frame normal is `T`'s (interpolated) normal.
 
 use super::bvh::Bvh;
-use super::triangle::Triangle;
+use super::triangle::{Closest, Feature, Triangle};
 use crate::frame::rescaled;
 use glam::DVec3;
 
@@ -42,6 +42,9 @@ pub(super) struct FaceRegion {
     /// the line of edge `i` (corner `i` to `i + 1`), positive inside.
     inward: [DVec3; 3],
     offset: [f64; 3],
+    /// `1 / h_i`, `h_i` the altitude from edge `i` to the opposite corner `i + 2`: that corner's
+    /// barycentric coordinate is `e_i / h_i`.
+    inverse_altitude: [f64; 3],
     /// `t(p) = n·p − plane`.
     plane: f64,
     margin: [f64; LEVELS],
@@ -58,7 +61,7 @@ pub(super) struct Piece {
 
 impl FaceRegion {
     /// Certifies nothing (no point is that far inside).
-    const NONE: FaceRegion = FaceRegion { inward: [DVec3::ZERO; 3], offset: [0.0; 3], plane: 0.0, margin: [f64::INFINITY; LEVELS], height: [[0.0; LEVELS]; 2] };
+    const NONE: FaceRegion = FaceRegion { inward: [DVec3::ZERO; 3], offset: [0.0; 3], inverse_altitude: [0.0; 3], plane: 0.0, margin: [f64::INFINITY; LEVELS], height: [[0.0; LEVELS]; 2] };
 
     /// The certified regions of every triangle (in the hierarchy's order); `epsilon` is the
     /// rounding scale of the coordinates, taken off every certified height.
@@ -150,18 +153,46 @@ impl FaceRegion {
         }
         // Rounding of the queries' coordinates: certify a little less.
         let height = height.map(|hs| hs.map(|h| (h * (1.0 - 1e-9) - 4.0 * epsilon).max(0.0)));
-        FaceRegion { inward, offset, plane: n.dot(t.p[0]), margin, height }
+        let inverse_altitude = lengths.map(|l| l / twice_area);
+        FaceRegion { inward, offset, inverse_altitude, plane: n.dot(t.p[0]), margin, height }
     }
 
-    /// Whether `p` is certified (its heights grow with the margin: the largest margin below
-    /// `p`'s decides).
-    pub fn contains(&self, n: DVec3, p: DVec3) -> bool {
-        let e_min = (0..3).map(|k| self.inward[k].dot(p) + self.offset[k]).fold(f64::INFINITY, f64::min);
-        let t = n.dot(p) - self.plane;
+    /// The closest point of triangle `index` (unit normal `n`, this region's) to `p`, where the
+    /// region certifies `p` ([`Self::piece`]'s points; else see [`Self::certified_closest`]):
+    /// `p`'s projection on the face, in O(1) (the general test, [`super::triangle::
+    /// closest_on_triangle`], first decides which feature is closest).
+    pub fn face_closest(&self, n: DVec3, p: DVec3, index: u32) -> Closest {
+        self.projection(n, p, self.edge_distances(p), n.dot(p) - self.plane, index)
+    }
+
+    /// [`Self::face_closest`] where the region certifies `p`, else `None`.
+    pub fn certified_closest(&self, n: DVec3, p: DVec3, index: u32) -> Option<Closest> {
+        let (e, t) = (self.edge_distances(p), n.dot(p) - self.plane);
+        self.certifies(e, t).then(|| self.projection(n, p, e, t, index))
+    }
+
+    /// `e_i(p)` for the three edges.
+    fn edge_distances(&self, p: DVec3) -> [f64; 3] {
+        [0, 1, 2].map(|k| self.inward[k].dot(p) + self.offset[k])
+    }
+
+    /// Whether the point with edge distances `e` at height `t` is certified (its heights grow
+    /// with the margin: the largest margin below its least `e_i` decides).
+    fn certifies(&self, e: [f64; 3], t: f64) -> bool {
+        let e_min = e[0].min(e[1]).min(e[2]);
         match (0..LEVELS).rev().find(|&level| e_min >= self.margin[level]) {
             Some(level) => if t >= 0.0 { t <= self.height[0][level] } else { -t <= self.height[1][level] },
             None => false,
         }
+    }
+
+    /// The projection of `p` (edge distances `e`, height `t`) on the face. Corner `i + 2` lies
+    /// opposite edge `i`; the coordinates sum to 1 as [`super::triangle::closest_on_triangle`]'s.
+    /// (In a certified region every `e_i >= 0` up to rounding: the projection is the closest
+    /// point of the triangle, at distance `|t|`.)
+    fn projection(&self, n: DVec3, p: DVec3, e: [f64; 3], t: f64, index: u32) -> Closest {
+        let (v, w) = (e[2] * self.inverse_altitude[2], e[0] * self.inverse_altitude[0]);
+        Closest { triangle: index, point: p - t * n, barycentric: DVec3::new(1.0 - v - w, v, w), feature: Feature::Face, distance_sq: t * t }
     }
 
     /// Where a segment from `p` on the boundary of the region's first inset (margin
@@ -182,7 +213,7 @@ impl FaceRegion {
     /// The longest certified piece of the segment `p + s d`, `s ∈ [0, length]`, of triangle `t`
     /// (whose region this is); `None` when `p` is not certified.
     pub fn piece(&self, n: DVec3, p: DVec3, d: DVec3, length: f64) -> Option<Piece> {
-        let e0 = [0, 1, 2].map(|k| self.inward[k].dot(p) + self.offset[k]);
+        let e0 = self.edge_distances(p);
         let de = [0, 1, 2].map(|k| self.inward[k].dot(d));
         let (t0, dt) = (n.dot(p) - self.plane, n.dot(d));
         let e_min = e0[0].min(e0[1]).min(e0[2]);

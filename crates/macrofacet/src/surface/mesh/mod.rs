@@ -101,6 +101,9 @@ pub struct TriangleMesh {
 #[derive(Clone, Debug, Default)]
 pub struct MeshCache {
     candidates: grid::Lists,
+    /// The current segment lies in the face region of its one candidate: a point query there
+    /// is that triangle's projection ([`region::FaceRegion::face_closest`]).
+    certified: bool,
     /// A point of the ray and the triangle closest to it (the start of the next segment).
     hint: Option<(DVec3, u32)>,
 }
@@ -544,6 +547,7 @@ impl TriangleMesh {
         };
         cache.candidates.clear();
         cache.candidates.push(i);
+        cache.certified = true;
         cache.hint = Some((end_p, i));
         Ok(SegmentBound {
             length: piece,
@@ -614,6 +618,10 @@ impl MeanSurface for TriangleMesh {
     }
 
     fn point_on_segment(&self, p: DVec3, cache: &MeshCache) -> Result<SurfacePoint> {
+        if cache.certified {
+            let i = cache.candidates[0];
+            return Ok(self.surface_point(p, &self.regions[i as usize].face_closest(self.triangles[i as usize].n, p, i)));
+        }
         let found = if cache.candidates.is_empty() { Closest::NONE } else { closest_among(&self.triangles, p, &cache.candidates, Closest::NONE) };
         if found.triangle == Closest::NONE.triangle {
             // A query of the whole mesh, from the triangle closest to a point of this ray.
@@ -624,6 +632,7 @@ impl MeanSurface for TriangleMesh {
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> Result<SegmentBound> {
         let (short, requested) = (SHORT_PIECE * tolerance, length);
+        cache.certified = false;
         // The far bound over the length asked for, with no candidates for the point queries.
         let far = |cache: &mut MeshCache| {
             cache.candidates.clear();
@@ -634,6 +643,7 @@ impl MeanSurface for TriangleMesh {
                 // The certified piece's triangle is the closest at `p`: the far bound's chord
                 // starts from it. (Its end and candidate were recorded for a segment not taken.)
                 cache.hint = Some((p, cache.candidates[0]));
+                cache.certified = false;
                 return far(cache);
             }
             Ok(bound) => return Ok(bound),

@@ -193,7 +193,8 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         // sampled up to the nearest so far (SuperposedMedium, scene.h).
         const MediumInteraction* from = from_medium_event ? last_event : nullptr;
         from_medium_event = false;
-        if (vol && (medium || !scene_.superposed_media().empty())) {
+        // (A ray that meets no medium skips their flights, weights and renormalisation.)
+        if (vol && (medium || scene_.may_enter_superposed(ray))) {
             Rgb w(1.0f), pr(1.0f);
             float tmax = found ? hit.t : kInf;
             const Medium* scattering = nullptr;

@@ -93,7 +93,7 @@ unsigned Scene::add_near_scene(const std::vector<std::shared_ptr<Shape>>& shapes
 
 bool SuperposedMedium::clip(const Ray& ray, float t_max, Ray* inside, float* t0, float* length) const {
     double lo, hi;
-    if (!region_->chord(ray.o, ray.d, double(region_->radius()) * (1.0 + kRegionMargin), &lo, &hi)) return false;
+    if (!region_->chord(ray.o, ray.d, radius(), &lo, &hi)) return false;
     lo = std::max(lo, 0.0);
     hi = std::min(hi, double(t_max));
     if (!(lo < hi)) return false;

@@ -60,6 +60,9 @@ public:
     /// *pdf_ratio are 1 when the ray misses it).
     bool sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int channel, Sampler& sampler,
                             MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const;
+    /// False only where the ray's half-line has no part inside the region (clip finds nothing
+    /// for any t_max): a cheaper test, for rays that meet no medium.
+    bool may_enter(const Ray& ray) const { return region_->may_enter(ray.o, ray.d, radius()); }
     /// Medium::transmittance over the part of [0, t_max] inside the region.
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const;
     /// Medium::transmittance_kept over that part: an estimate of T / survival.
@@ -67,6 +70,8 @@ public:
 
 private:
     static constexpr double kRegionMargin = 1e-4;
+    /// The region's radius with the margin.
+    double radius() const { return double(region_->radius()) * (1.0 + kRegionMargin); }
     /// The part [t0, t1] of [0, t_max] inside the region, as a ray starting at t0; false if empty.
     bool clip(const Ray& ray, float t_max, Ray* inside, float* t0, float* length) const;
     const Medium* medium_;
@@ -104,6 +109,12 @@ public:
     const std::vector<const Emitter*>& infinite_emitters() const { return infinite_; }
     void add_superposed_medium(SuperposedMedium m);
     const std::vector<SuperposedMedium>& superposed_media() const { return superposed_; }
+    /// Whether the ray may enter a superposed medium's region (SuperposedMedium::may_enter).
+    bool may_enter_superposed(const Ray& ray) const {
+        for (const SuperposedMedium& m : superposed_)
+            if (m.may_enter(ray)) return true;
+        return false;
+    }
     /// The opaque core of a macrofacet shell on the sphere of `center` and `radius`
     /// (MacrofacetMedium::opaque_core): rays from f >= start_level that reach f <= core_level
     /// have a transmittance that rounds to 0.

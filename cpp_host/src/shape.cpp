@@ -143,11 +143,7 @@ void SphereShape::sample_position(const Vec2& u, Vec3* p, Vec3* n) const {
 }
 
 bool SphereShape::chord(const Vec3& o, const Vec3& d, double radius, double* t0, double* t1) const {
-    double ox = double(o.x) - c_.x, oy = double(o.y) - c_.y, oz = double(o.z) - c_.z;
-    double a = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
-    double b = ox * d.x + oy * d.y + oz * d.z;
-    double c = ox * ox + oy * oy + oz * oz - radius * radius;
-    double disc = b * b - a * c;
+    const auto [a, b, c, disc] = quadratic(o, d, radius);
     if (!(disc >= 0)) return false;
     double sq = std::sqrt(disc);
     // numerically stable roots

@@ -128,6 +128,30 @@ TEST_CASE(sphere_tangent_is_mitsubas_dpdu) {
     CHECK_NEAR(MeanSurface::of(flipped)->eval(c, nullptr, nullptr), 2.0, 1e-6);
 }
 
+TEST_CASE(sphere_may_enter_is_false_only_where_no_chord_lies_ahead) {
+    // Li skips the media of a ray that may enter no superposed region: wherever chord() finds a
+    // part of the half-line t > 0 inside, may_enter must be true. Origins inside, near and far
+    // outside; half the rays aimed at the sphere.
+    const Vec3 c(0.5f, -1, 2);
+    SphereShape sphere(c, 1.5f, false, Mat4());
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1, 1);
+    int ahead = 0, skipped = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3 o = c + rand_point(rng, i % 3 == 0 ? 1.6f : 6.0f);
+        const Vec3 d = i % 2 ? normalize(Vec3(u(rng), u(rng), u(rng))) : normalize(c + rand_point(rng, 1.4f) - o);
+        const double radius = 1.5 * (1 + 1e-4);
+        double t0, t1;
+        const bool lies_ahead = sphere.chord(o, d, radius, &t0, &t1) && t1 > 0;
+        const bool may = sphere.may_enter(o, d, radius);
+        ahead += lies_ahead;
+        skipped += !may;
+        CHECK_MSG(may || !lies_ahead, "a chord ahead from " + std::to_string(o.x) + ", " + std::to_string(o.y) + ", " + std::to_string(o.z));
+    }
+    // Not vacuous: both kinds of ray are common.
+    CHECK_MSG(ahead > 5000 && skipped > 5000, std::to_string(ahead) + " rays with a chord ahead, " + std::to_string(skipped) + " skipped");
+}
+
 TEST_CASE(open_meshes_are_refused) {
     MeshShape rect(make_rectangle_mesh(), "rectangle");
     bool threw = false;

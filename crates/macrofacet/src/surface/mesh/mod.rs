@@ -15,7 +15,8 @@
 //! `A(s) = min_T tangent_T(s)` of `|f|` stays positive the sign cannot change, so the segment is
 //! cut where it may cross the surface and each part gets linear bounds. The frame normal's range
 //! follows from the candidates' vertex normals (or, for the gradient, from the monotone
-//! derivatives of the `d_T`). A point query on the current segment searches the candidates only.
+//! derivatives of the `d_T`). A point query on the current segment searches the candidates only
+//! (on a certified segment, its one triangle's projection).
 
 mod bvh;
 mod edge;

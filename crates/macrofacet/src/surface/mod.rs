@@ -229,8 +229,9 @@ pub trait MeanSurface {
     }
 
     /// The surface at a point of the segment of the last [`Self::bound`] call with this `cache`;
-    /// may use the cache to answer faster, must answer exactly as [`Self::point`] (but for `uv`,
-    /// see [`Self::uv`]).
+    /// may use the cache to answer faster, must answer as [`Self::point`] (but for `uv`, see
+    /// [`Self::uv`]), up to the rounding of another way to the same closest point (a mesh's
+    /// certified projection).
     fn point_on_segment(&self, p: DVec3, _cache: &Self::Cache) -> Result<SurfacePoint> {
         self.point(p)
     }

@@ -83,7 +83,7 @@ pub fn descent_transmittance_bound(height: &HeightProfile, kappa: f64, f_from: f
     if !(kappa > 0.0 && to < from) {
         return 1.0;
     }
-    let depth = kappa * (ln_normal_cdf(from / height.sigma) - ln_normal_cdf(to / height.sigma));
+    let depth = kappa * (height.ln_cdf(from) - height.ln_cdf(to));
     // (ln Φ(−∞) = −∞: depth +∞, bound 0.)
     (-depth).exp().min(1.0)
 }

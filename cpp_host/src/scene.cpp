@@ -141,13 +141,12 @@ void Scene::add_opaque_core(const Vec3& center, double radius, double start_leve
     // far beyond the rounding of a chord in double precision (~1e-15 r).
     const double margin = 1e-6 * radius, core = radius + core_level - margin, start = radius + start_level + margin;
     if (!(core > 0) || !(start > core)) return;  // (a core deeper than the centre: none)
-    cores_.push_back(OpaqueCore{center.x, center.y, center.z, start * start, core * core, radius, medium->shell_top(), medium});
+    cores_.push_back(OpaqueCore{center, start * start, core * core, radius, medium->shell_top(), medium});
 }
 
 Scene::CoreChord Scene::chord_of(const OpaqueCore& c, const Vec3& o, const Vec3& d) {
-    const double ox = double(o.x) - c.cx, oy = double(o.y) - c.cy, oz = double(o.z) - c.cz;
-    return CoreChord{ox * ox + oy * oy + oz * oz, ox * d.x + oy * d.y + oz * d.z,
-                     double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z};
+    const SphereShape::Quadratic q = SphereShape::quadratic(o, d, c.center, 0.0);  // (q.c = |o − c|²)
+    return CoreChord{q.c, q.b, q.a};
 }
 
 bool Scene::blocks(const OpaqueCore& c, const CoreChord& ray, float dist) {

@@ -171,7 +171,8 @@ private:
     std::vector<SuperposedMedium> superposed_;
     /// add_opaque_core: squared radii, each with a margin for the chord's rounding.
     struct OpaqueCore {
-        double cx, cy, cz, start_radius2, core_radius2, radius, top;
+        Vec3 center;
+        double start_radius2, core_radius2, radius, top;
         const MacrofacetMedium* medium;
     };
     std::vector<OpaqueCore> cores_;

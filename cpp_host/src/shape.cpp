@@ -143,7 +143,7 @@ void SphereShape::sample_position(const Vec2& u, Vec3* p, Vec3* n) const {
 }
 
 bool SphereShape::chord(const Vec3& o, const Vec3& d, double radius, double* t0, double* t1) const {
-    const auto [a, b, c, disc] = quadratic(o, d, radius);
+    const auto [a, b, c, disc] = quadratic(o, d, c_, radius);
     if (!(disc >= 0)) return false;
     double sq = std::sqrt(disc);
     // numerically stable roots

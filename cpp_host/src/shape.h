@@ -159,22 +159,23 @@ public:
     /// its square root.
     bool may_enter(const Vec3& o, const Vec3& d, double radius) const {
         // From outside (c > 0) heading away (b >= 0) both roots are <= 0: chord's t1 = c / q < 0.
-        const Quadratic q = quadratic(o, d, radius);
+        const Quadratic q = quadratic(o, d, c_, radius);
         return q.disc >= 0 && (q.c <= 0 || q.b < 0);
     }
-
-private:
-    /// The line's quadratic |o + t d - c|^2 = radius^2 as a t^2 + 2 b t + c = 0, and b^2 - a c.
+    /// The line's quadratic |o + t d - centre|^2 = radius^2 as a t^2 + 2 b t + c = 0, and
+    /// b^2 - a c, in double precision (with radius 0, c is |o - centre|^2).
     struct Quadratic {
         double a, b, c, disc;
     };
-    Quadratic quadratic(const Vec3& o, const Vec3& d, double radius) const {
-        double ox = double(o.x) - c_.x, oy = double(o.y) - c_.y, oz = double(o.z) - c_.z;
+    static Quadratic quadratic(const Vec3& o, const Vec3& d, const Vec3& centre, double radius) {
+        double ox = double(o.x) - centre.x, oy = double(o.y) - centre.y, oz = double(o.z) - centre.z;
         double a = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
         double b = ox * d.x + oy * d.y + oz * d.z;
         double c = ox * ox + oy * oy + oz * oz - radius * radius;
         return Quadratic{a, b, c, b * b - a * c};
     }
+
+private:
     /// Local unit direction of world point p (Mitsuba's to_object(p), normalised).
     Vec3 local_dir(const Vec3& p) const;
     Vec3 c_;

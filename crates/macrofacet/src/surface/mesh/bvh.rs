@@ -140,6 +140,29 @@ impl Bvh {
     /// a partial list) as soon as there are more than `max`.
     pub fn within(&self, triangles: &[Triangle], p: DVec3, radius: f64, max: usize, out: &mut Vec<u32>) -> bool {
         out.clear();
+        let complete = self.visit_within(triangles, p, radius, |i, _| {
+            out.push(i);
+            out.len() <= max
+        });
+        if complete {
+            out.sort_unstable();
+        }
+        complete
+    }
+
+    /// [`Self::within`] with each triangle's squared distance (`(distance², index)`, in no
+    /// particular order).
+    pub fn within_distances(&self, triangles: &[Triangle], p: DVec3, radius: f64, max: usize, out: &mut Vec<(f64, u32)>) -> bool {
+        out.clear();
+        self.visit_within(triangles, p, radius, |i, distance_sq| {
+            out.push((distance_sq, i));
+            out.len() <= max
+        })
+    }
+
+    /// Calls `found(index, distance²)` for every triangle within `radius` of `p` (its closest
+    /// point's distance), until `found` returns `false`; whether it never did.
+    fn visit_within(&self, triangles: &[Triangle], p: DVec3, radius: f64, mut found: impl FnMut(u32, f64) -> bool) -> bool {
         let r2 = radius * radius;
         let mut stack = [0u32; STACK];
         let mut top = 1;
@@ -152,9 +175,15 @@ impl Bvh {
                     continue;
                 }
                 if n.is_leaf(k) {
-                    out.extend((n.first[k]..n.first[k] + n.count[k]).filter(|&i| closest_on_triangle(&triangles[i as usize], p, i).distance_sq <= r2));
-                    if out.len() > max {
-                        return false;
+                    for i in n.first[k]..n.first[k] + n.count[k] {
+                        // (The cheap test first: it fails only farther than `radius`.)
+                        if !may_be_within(&triangles[i as usize], p, r2) {
+                            continue;
+                        }
+                        let distance_sq = closest_on_triangle(&triangles[i as usize], p, i).distance_sq;
+                        if distance_sq <= r2 && !found(i, distance_sq) {
+                            return false;
+                        }
                     }
                 } else {
                     stack[top] = n.first[k];
@@ -162,7 +191,6 @@ impl Bvh {
                 }
             }
         }
-        out.sort_unstable();
         true
     }
 }

@@ -64,8 +64,7 @@ impl CellGrid {
             if f64::from(y) > x.max(0.0) { f32::from_bits(y.to_bits().saturating_sub(1)) } else { y }
         };
         let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
-        let mut scratch = Vec::new();
-        // A descent through blocks halving down to cells: a block whose centre is farther than
+                // A descent through blocks halving down to cells: a block whose centre is farther than
         // the band plus its half diagonal holds no band cell, and bounds its cells' distances.
         let blocks = dims / BLOCK;
         // With each block, the triangle closest to its parent's centre: it seeds the search.
@@ -77,6 +76,9 @@ impl CellGrid {
                 }
             }
         }
+        // A cell's list holds the triangles within this of its centre, `d` the centre's distance.
+        let reach_of = |d: f64| (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
+        let mut near = Vec::new();
         while let Some((first, size, seed)) = stack.pop() {
             let block_centre = origin + (first.as_dvec3() + 0.5 * size as f64) * h;
             let seed = seed.map_or(Closest::NONE, |i| closest_on_triangle(&triangles[i as usize], block_centre, i));
@@ -112,23 +114,8 @@ impl CellGrid {
             if d > band {
                 continue;
             }
-            let reach = (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
-            if bvh.within(triangles, centre, reach, MAX_LIST, &mut scratch) {
-                // Keep a triangle only if it can come within d + r (the farthest any cell point
-                // is from the mesh) of the cell: the distance between bounding boxes and the
-                // distance from its plane to the cell bound its distance to the cell from below.
-                let (lo, hi) = (origin + c.as_dvec3() * h, origin + (c.as_dvec3() + 1.0) * h);
-                let limit = (d + half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
-                scratch.retain(|&i| {
-                    let t = &triangles[i as usize];
-                    let (tlo, thi) = (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]));
-                    let gap = (tlo - hi).max(lo - thi).max(DVec3::ZERO).length();
-                    let plane = (t.n.dot(centre - t.p[0]).abs() - 0.5 * h * t.n.abs().element_sum()).max(0.0);
-                    gap.max(plane) <= limit
-                });
-                // Nearest to the centre first: queries start from it.
-                scratch.sort_by_cached_key(|&i| closest_on_triangle(&triangles[i as usize], centre, i).distance_sq.to_bits());
-                lists_of[index(c)] = std::mem::take(&mut scratch);
+            if bvh.within_distances(triangles, centre, reach_of(d), MAX_LIST, &mut near) {
+                lists_of[index(c)] = cell_list(triangles, c, origin, h, d, half_diagonal, &near);
             }
         }
         let mut offsets = Vec::with_capacity(count + 1);
@@ -280,6 +267,29 @@ fn sign(x: f64) -> i32 {
     } else {
         0
     }
+}
+
+/// Cell `c`'s list from the triangles within its reach (`candidates`: `(distance², index)` from
+/// the cell's centre, in any order: [`Bvh::within_distances`]), `d` the centre's distance to the mesh: those that can come
+/// within `d + r` (the farthest any cell point is from the mesh) of the cell, by the distance
+/// between bounding boxes and the distance from the triangle's plane (both bound the distance to
+/// the cell from below), nearest to the centre first (queries start from it; ties by index).
+fn cell_list(triangles: &[Triangle], c: IVec3, origin: DVec3, h: f64, d: f64, half_diagonal: f64, candidates: &[(f64, u32)]) -> Vec<u32> {
+    let (lo, hi) = (origin + c.as_dvec3() * h, origin + (c.as_dvec3() + 1.0) * h);
+    let centre = origin + (c.as_dvec3() + 0.5) * h;
+    let limit = (d + half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
+    let mut kept: Vec<(u64, u32)> = Vec::with_capacity(candidates.len());
+    for &(distance_sq, i) in candidates {
+        let t = &triangles[i as usize];
+        let (tlo, thi) = (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]));
+        let gap = (tlo - hi).max(lo - thi).max(DVec3::ZERO).length();
+        let plane = (t.n.dot(centre - t.p[0]).abs() - 0.5 * h * t.n.abs().element_sum()).max(0.0);
+        if gap.max(plane) <= limit {
+            kept.push((distance_sq.to_bits(), i));
+        }
+    }
+    kept.sort_unstable();
+    kept.into_iter().map(|(_, i)| i).collect()
 }
 
 #[cfg(test)]

@@ -152,12 +152,7 @@ impl TriangleMesh {
         if !self.bvh.within(&self.triangles, o.centre, o.radius + required, MAX_NEIGHBOURS, near) {
             return false;
         }
-        near.iter().all(|&g| {
-            let g = &self.triangles[g as usize];
-            // The distance to a triangle is at least the distance to its plane.
-            let above_plane = g.n != DVec3::ZERO && o.p.iter().all(|&q| g.n.dot(q - g.p[0]) >= required);
-            above_plane || triangle_distance(o, g) >= required
-        })
+        near.iter().all(|&g| at_least_apart(o, &self.triangles[g as usize], required))
     }
 
     /// True when each connected part of the offset mesh `faces` (vertices `offset`, moved from
@@ -220,7 +215,7 @@ fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, near: &mut
             // (On the stack: this runs for every pair of neighbouring faces.)
             let shared: SmallVec<[usize; 3]> = (0..3).filter(|&i| corners[b].contains(&corners[a][i])).collect();
             match shared.len() {
-                0 => triangle_distance(fa, fb) > apart,
+                0 => at_least_apart(fa, fb, apart),
                 1 => {
                     let opposite = |c: &[u32; 3], f: &Triangle, v: u32| {
                         let i = c.iter().position(|&x| x == v).unwrap_or(0);
@@ -236,6 +231,17 @@ fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, near: &mut
             }
         })
     })
+}
+
+/// Whether triangles `a` and `b` lie at least `gap` apart: one wholly beyond the other's plane by
+/// `gap` (on either side; the distance to a triangle is at least that to its plane), else by
+/// their distance.
+fn at_least_apart(a: &Triangle, b: &Triangle, gap: f64) -> bool {
+    let beyond = |s: &Triangle, t: &Triangle| {
+        let h = t.p.map(|q| s.n.dot(q - s.p[0]));
+        s.n != DVec3::ZERO && (h.iter().all(|&x| x >= gap) || h.iter().all(|&x| x <= -gap))
+    };
+    beyond(b, a) || beyond(a, b) || triangle_distance(a, b) >= gap
 }
 
 /// The distance between two triangles: where they do not meet, the closest pair has a point on

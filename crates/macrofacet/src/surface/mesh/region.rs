@@ -88,14 +88,15 @@ impl FaceRegion {
         // Rescaled before normalising, as the face normal (a tiny mesh's are subnormal).
         let inward = [0, 1, 2].map(|k| rescaled(n.cross(edge(k))).normalize());
         let offset = [0, 1, 2].map(|k| -inward[k].dot(t.p[k]));
-        // The incentre, and the corners of the inset at margin m: the triangle scaled about it.
+        // The incentre: the inset at margin `f r` (`r` the inradius) is the triangle scaled by
+        // `1 − f` about it.
         let incentre = (lengths[1] * t.p[0] + lengths[2] * t.p[1] + lengths[0] * t.p[2]) / perimeter;
         let margin = MARGINS.map(|f| f * inradius);
-        let corners = |m: f64| t.p.map(|c| incentre + (1.0 - m / inradius) * (c - incentre));
         let h_max = HEIGHT_EDGES * lengths.iter().copied().fold(0.0, f64::max);
+        // How far each inset's corner `k` lies from `T`'s: `f |p_k − incentre|`.
+        let from_incentre = t.p.map(|c| (c - incentre).length());
 
         let mut height = [[h_max; LEVELS]; 2];
-        let insets = margin.map(corners);
         // Competitors within 2 h_max of T: within 2 h_max + T's radius of its centre; nearest
         // first, since a triangle at distance D from T constrains only heights above D/2.
         let complete = bvh.within(triangles, t.centre, 2.0 * h_max + t.radius, usize::MAX, near);
@@ -126,27 +127,33 @@ impl FaceRegion {
                 (Some(k), None) => Some(k),
                 _ => None,
             };
+            // Directions u, each a valid lower bound: the plane of T (wholly on the far side:
+            // no constraint), the plane of T' either way, and the direction between centroids.
+            // Their dot products once for both sides (an opposite direction's are the negated
+            // ones, exactly); per side only `k = 1 − u·sn` changes.
+            let own = Along::new(n, t, incentre, other);
+            let theirs = (other.n != DVec3::ZERO).then(|| Along::new(other.n, t, incentre, other));
+            let between = (t.centre - other.centre).normalize_or_zero();
+            let centres = (between != DVec3::ZERO).then(|| Along::new(between, t, incentre, other));
+            let (own_k, their_cos, between_cos) = (1.0 - n.dot(n), other.n.dot(n), between.dot(n));
             for (side, s) in [(0, 1.0), (1, -1.0)] {
-                // Directions u, each a valid lower bound: the plane of T (wholly on the far side:
-                // no constraint), the plane of T' either way, and the direction between centroids.
-                let mut candidates: [DVec3; 4] = [s * n, other.n, -other.n, (t.centre - other.centre).normalize_or_zero()];
-                if other.n == DVec3::ZERO {
-                    candidates[1] = DVec3::ZERO;
-                    candidates[2] = DVec3::ZERO;
-                }
-                let cone = corner.and_then(|k| corner_cone(t, k, other, s * n));
-                // (Per direction once: what does not depend on the level's inset.)
-                let bounds = candidates.map(|u| (u != DVec3::ZERO).then(|| PlaneBound::new(u, s * n, other)));
+                let plane = own.bound(s, own_k);
+                let others = [theirs.map(|a| a.bound(1.0, 1.0 - s * their_cos)), theirs.map(|a| a.bound(-1.0, 1.0 + s * their_cos)), centres.map(|a| a.bound(1.0, 1.0 - s * between_cos))];
+                let mut cone = None;
                 for level in 0..LEVELS {
                     if height[side][level] <= half_gap {
                         continue;
                     }
-                    let inset = &insets[level];
-                    let by_cone = match (cone, corner) {
-                        (Some(per_distance), Some(k)) => per_distance * (inset[k] - t.p[k]).length(),
-                        _ => 0.0,
+                    let f = MARGINS[level];
+                    let by_plane = plane.certified_height(f, epsilon);
+                    if by_plane == f64::INFINITY {
+                        continue; // (the most any bound certifies)
+                    }
+                    let by_cone = match corner {
+                        Some(k) => cone.get_or_insert_with(|| corner_cone(t, k, other, s * n)).map_or(0.0, |per_distance| per_distance * (f * from_incentre[k])),
+                        None => 0.0,
                     };
-                    let best = bounds.iter().flatten().map(|b| b.certified_height(inset, epsilon)).fold(by_cone, f64::max);
+                    let best = others.iter().flatten().map(|b| b.certified_height(f, epsilon)).fold(by_cone.max(by_plane), f64::max);
                     height[side][level] = height[side][level].min(best);
                 }
             }
@@ -259,8 +266,11 @@ impl FaceRegion {
 fn corner_cone(t: &Triangle, k: usize, other: &Triangle, sn: DVec3) -> Option<f64> {
     let v = t.p[k];
     let ends = |tri: &Triangle| {
-        let rest: Vec<DVec3> = tri.p.iter().filter(|q| **q != v).map(|q| (*q - v).normalize_or_zero()).collect();
-        (rest.len() == 2 && rest[0] != DVec3::ZERO && rest[1] != DVec3::ZERO).then(|| [rest[0], rest[1]])
+        let mut rest = tri.p.iter().filter(|q| **q != v).map(|q| (*q - v).normalize_or_zero());
+        match (rest.next(), rest.next(), rest.next()) {
+            (Some(a), Some(b), None) if a != DVec3::ZERO && b != DVec3::ZERO => Some([a, b]),
+            _ => None,
+        }
     };
     let (a, b) = (ends(t)?, ends(other)?);
     // The largest w·x over unit x in the cone spanned by `c`: at the projection of w on the
@@ -291,24 +301,52 @@ fn corner_cone(t: &Triangle, k: usize, other: &Triangle, sn: DVec3) -> Option<f6
 }
 
 /// The lower bound `dist(p, T') >= u·p − max_{y∈T'} u·y` of the distance to a competitor `T'`
-/// along a unit direction `u`, with what it needs for every inset: `reach = max_{y∈T'} u·y` and
-/// `k = 1 − u·sn` (`sn` is the side's normal).
+/// along a unit direction `u`, with what it needs for every inset of `T`: `u·x − max_{y∈T'} u·y`
+/// at `T`'s incentre and its least over `T`'s corners, and `k = 1 − u·sn` (`sn` is the side's
+/// normal).
 struct PlaneBound {
-    u: DVec3,
-    reach: f64,
+    at_incentre: f64,
+    at_corners: f64,
     k: f64,
 }
 
-impl PlaneBound {
-    fn new(u: DVec3, sn: DVec3, other: &Triangle) -> PlaneBound {
-        PlaneBound { u, reach: other.p.iter().map(|y| u.dot(*y)).fold(f64::NEG_INFINITY, f64::max), k: 1.0 - u.dot(sn) }
+/// A direction `u`'s dot products with `T`'s incentre and the extremes over both triangles'
+/// corners: the [`PlaneBound`]s along `u` and along `−u`.
+#[derive(Clone, Copy)]
+struct Along {
+    at_incentre: f64,
+    corners: [f64; 2],
+    reach: [f64; 2],
+}
+
+impl Along {
+    fn new(u: DVec3, t: &Triangle, incentre: DVec3, other: &Triangle) -> Along {
+        let extremes = |p: &[DVec3; 3]| {
+            let dots = p.map(|x| u.dot(x));
+            [dots[0].min(dots[1]).min(dots[2]), dots[0].max(dots[1]).max(dots[2])]
+        };
+        Along { at_incentre: u.dot(incentre), corners: extremes(&t.p), reach: extremes(&other.p) }
     }
 
-    /// The certified height over the inset triangle `inset`: the largest `H` with
+    /// The bound along `sign u` (`sign = ±1`) with its `k`.
+    fn bound(&self, sign: f64, k: f64) -> PlaneBound {
+        if sign > 0.0 {
+            PlaneBound { at_incentre: self.at_incentre - self.reach[1], at_corners: self.corners[0] - self.reach[1], k }
+        } else {
+            PlaneBound { at_incentre: -self.at_incentre + self.reach[0], at_corners: -self.corners[1] + self.reach[0], k }
+        }
+    }
+}
+
+impl PlaneBound {
+    /// The certified height over the inset at margin `f r`: the largest `H` with
     /// `t (1 − u·sn) <= u·x − max_{y∈T'} u·y` for all `x` in the inset and `t <= H`; 0 when it
-    /// fails at `t = 0`, `∞` when unconstrained.
-    fn certified_height(&self, inset: &[DVec3; 3], epsilon: f64) -> f64 {
-        let lowest = inset.iter().map(|x| self.u.dot(*x) - self.reach).fold(f64::INFINITY, f64::min) - 4.0 * epsilon;
+    /// fails at `t = 0`, `∞` when unconstrained. The inset's corners are `incentre + (1 − f)(p_k −
+    /// incentre)`, so the affine right-hand side's least over them is `(1 − f)` of the way from
+    /// its value at the incentre to its least over `T`'s corners (rounded apart from the corners'
+    /// own values by a few ulps of the coordinates, far below `epsilon`).
+    fn certified_height(&self, f: f64, epsilon: f64) -> f64 {
+        let lowest = self.at_incentre + (1.0 - f) * (self.at_corners - self.at_incentre) - 4.0 * epsilon;
         if self.k <= 1e-12 {
             // u = s n: the whole of T' is on the far side (up to rounding), for every height.
             return if lowest >= -8.0 * epsilon { f64::INFINITY } else { 0.0 };

@@ -65,7 +65,8 @@ impl CellGrid {
         };
         let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
                 // A descent through blocks halving down to cells: a block whose centre is farther than
-        // the band plus its half diagonal holds no band cell, and bounds its cells' distances.
+        // the band plus the distance to its farthest cell's centre holds no band cell (a cell is
+        // in the band by its centre's distance), and bounds its cells' distances.
         let blocks = dims / BLOCK;
         // With each block, the triangle closest to its parent's centre: it seeds the search.
         let mut stack: Vec<(IVec3, i32, Option<u32>)> = Vec::new();
@@ -84,8 +85,9 @@ impl CellGrid {
             let seed = seed.map_or(Closest::NONE, |i| closest_on_triangle(&triangles[i as usize], block_centre, i));
             let nearest = bvh.closest(triangles, block_centre, seed);
             let d_block = nearest.distance_sq.sqrt();
-            let block_half_diagonal = half_diagonal * size as f64;
-            if size > 1 && d_block - block_half_diagonal > band {
+            // Its cells' centres lie within (size − 1) cell half diagonals of its centre.
+            let farthest_centre = half_diagonal * (size - 1) as f64;
+            if size > 1 && d_block - farthest_centre > band {
                 // Every point of a cell is at least d_block minus its distance from the centre.
                 for z in 0..size {
                     for y in 0..size {

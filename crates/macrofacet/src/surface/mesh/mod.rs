@@ -915,6 +915,43 @@ mod tests {
         }
     }
 
+    /// The grid's lists hold a closest triangle of every point of their cells, and its distance
+    /// bound lies below the distance everywhere: points near and around a torus, a lumpy one,
+    /// an L prism and a cube, against every triangle.
+    #[test]
+    fn grid_lists_hold_the_closest_triangle_and_its_bounds_hold() {
+        let mut rng = Pcg32::new(41, 6);
+        for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 32, 16)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15)), ("l_prism", meshes::l_prism()), ("cube", meshes::cube())] {
+            let s = TriangleMesh::new(&mesh.positions, &mesh.indices, None, None).unwrap();
+            let extent = (s.bounds.max - s.bounds.min).max_element();
+            let (mut listed, mut bounded) = (0, 0);
+            for n in 0..8000 {
+                // Half of them within a tenth of the extent of a face, half anywhere in the box
+                // grown by half the extent on each side.
+                let p = if n % 2 == 0 {
+                    let t = &s.triangles[(rng.next_f64() * s.triangles.len() as f64) as usize];
+                    let (u, v) = (rng.next_f64(), rng.next_f64());
+                    let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                    t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0]) + 0.1 * extent * (2.0 * rng.next_f64() - 1.0) * t.n
+                } else {
+                    let r = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+                    s.bounds.min - 0.5 * extent * DVec3::ONE + r * (s.bounds.max - s.bounds.min + extent * DVec3::ONE)
+                };
+                let exact = (0..s.triangles.len() as u32).map(|i| closest_on_triangle(&s.triangles[i as usize], p, i).distance_sq).fold(f64::INFINITY, f64::min);
+                let lower = s.grid.distance_bound(p);
+                assert!(lower <= exact.sqrt(), "{name}: the bound {lower} at {p} exceeds the distance {}", exact.sqrt());
+                bounded += usize::from(lower > 0.0);
+                if let Some(list) = s.grid.list_at(p) {
+                    listed += 1;
+                    let among = list.iter().map(|&i| closest_on_triangle(&s.triangles[i as usize], p, i).distance_sq).fold(f64::INFINITY, f64::min);
+                    assert_eq!(among, exact, "{name}: the list at {p} misses the closest triangle");
+                }
+            }
+            // Not vacuous: many points in listed cells, many with a positive bound.
+            assert!(listed > 1500 && bounded > 1000, "{name}: {listed} points in listed cells, {bounded} with a positive bound, of 8000");
+        }
+    }
+
     /// In an edge's zone the dihedral bound holds `f` and the frame's `d·n` along the whole
     /// segment, where the point queries of the whole mesh find one of the edge's two triangles:
     /// short segments across edges near the surface of a smooth torus (with its vertex normals

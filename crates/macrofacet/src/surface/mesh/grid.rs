@@ -64,7 +64,7 @@ impl CellGrid {
             if f64::from(y) > x.max(0.0) { f32::from_bits(y.to_bits().saturating_sub(1)) } else { y }
         };
         let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
-                // A descent through blocks halving down to cells: a block whose centre is farther than
+        // A descent through blocks halving down to cells: a block whose centre is farther than
         // the band plus the distance to its farthest cell's centre holds no band cell (a cell is
         // in the band by its centre's distance), and bounds its cells' distances.
         let blocks = dims / BLOCK;

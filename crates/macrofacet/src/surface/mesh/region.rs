@@ -67,11 +67,14 @@ impl FaceRegion {
     /// rounding scale of the coordinates, taken off every certified height.
     pub fn build(bvh: &Bvh, triangles: &[Triangle], epsilon: f64) -> Vec<FaceRegion> {
         let (mut near, mut by_gap) = (Vec::new(), Vec::new());
-        (0..triangles.len()).map(|i| Self::of(bvh, triangles, i, epsilon, &mut near, &mut by_gap)).collect()
+        // Every triangle's cones at its corners, once (each serves all the neighbours there).
+        let cones: Vec<[Option<Cone>; 3]> = triangles.iter().map(|t| t.p.map(|v| Cone::at(t, v))).collect();
+        (0..triangles.len()).map(|i| Self::of(bvh, triangles, &cones, i, epsilon, &mut near, &mut by_gap)).collect()
     }
 
     /// `near` and `by_gap`: scratch space, reused from triangle to triangle.
-    fn of(bvh: &Bvh, triangles: &[Triangle], i: usize, epsilon: f64, near: &mut Vec<u32>, by_gap: &mut Vec<(f64, u32)>) -> FaceRegion {
+    #[allow(clippy::too_many_arguments)]
+    fn of(bvh: &Bvh, triangles: &[Triangle], cones: &[[Option<Cone>; 3]], i: usize, epsilon: f64, near: &mut Vec<u32>, by_gap: &mut Vec<(f64, u32)>) -> FaceRegion {
         let t = &triangles[i];
         let n = t.n;
         if n == DVec3::ZERO {
@@ -121,12 +124,15 @@ impl FaceRegion {
                 break;
             }
             let other = &triangles[j as usize];
-            // A neighbour sharing one corner: the bound of the cones at that corner.
+            // A neighbour sharing one corner: the bound of the cones at that corner (the angle
+            // between them for both sides, once).
             let mut shared = (0..3).filter(|&k| other.p.contains(&t.p[k]));
             let corner = match (shared.next(), shared.next()) {
                 (Some(k), None) => Some(k),
                 _ => None,
             };
+            let theirs_at = |k: usize| other.p.iter().position(|q| *q == t.p[k]).and_then(|m| cones[j as usize][m]);
+            let mut cones_gap = None;
             // Directions u, each a valid lower bound: the plane of T (wholly on the far side:
             // no constraint), the plane of T' either way, and the direction between centroids.
             // Their dot products once for both sides (an opposite direction's are the negated
@@ -139,7 +145,7 @@ impl FaceRegion {
             for (side, s) in [(0, 1.0), (1, -1.0)] {
                 let plane = own.bound(s, own_k);
                 let others = [theirs.map(|a| a.bound(1.0, 1.0 - s * their_cos)), theirs.map(|a| a.bound(-1.0, 1.0 + s * their_cos)), centres.map(|a| a.bound(1.0, 1.0 - s * between_cos))];
-                let mut cone = None;
+                let mut per_distance = None;
                 for level in 0..LEVELS {
                     if height[side][level] <= half_gap {
                         continue;
@@ -150,7 +156,13 @@ impl FaceRegion {
                         continue; // (the most any bound certifies)
                     }
                     let by_cone = match corner {
-                        Some(k) => cone.get_or_insert_with(|| corner_cone(t, k, other, s * n)).map_or(0.0, |per_distance| per_distance * (f * from_incentre[k])),
+                        Some(k) => {
+                            let factor = *per_distance.get_or_insert_with(|| {
+                                let (mine, theirs) = (cones[i][k]?, theirs_at(k)?);
+                                corner_cone(*cones_gap.get_or_insert_with(|| mine.gap(&theirs)), &theirs, s * n)
+                            });
+                            factor.map_or(0.0, |c| c * (f * from_incentre[k]))
+                        }
                         None => 0.0,
                     };
                     let best = others.iter().flatten().map(|b| b.certified_height(f, epsilon)).fold(by_cone.max(by_plane), f64::max);
@@ -258,46 +270,68 @@ impl FaceRegion {
 /// For a neighbour `other` that shares only corner `k` of `t`: a factor `c` such that every point
 /// `x + τ sn` with `x` in `t` at distance `r` from the corner `v` and `τ <= c r` is at least `τ`
 /// from `other`; `None` when the cones at `v` touch, `∞` when `other` lies wholly on the far side.
+/// `gap` is `1 − cos γ` ([`Cone::gap`]), `theirs` `other`'s cone at `v`.
 ///
 /// With `z = y − v` for `y` in `other` and `h = sn·z > 0`, `|x + τ sn − y| >= τ` iff
 /// `τ <= |r − z|² / (2h)`, and over `|z|` that is at least `|r| (1 − r̂·ẑ)/h >= r (1 − cos γ)/h_max`:
 /// `γ` the least angle between the two triangles' cones at `v`, `h_max` the most `sn·ẑ` over
 /// `other`'s cone.
-fn corner_cone(t: &Triangle, k: usize, other: &Triangle, sn: DVec3) -> Option<f64> {
-    let v = t.p[k];
-    let ends = |tri: &Triangle| {
-        let mut rest = tri.p.iter().filter(|q| **q != v).map(|q| (*q - v).normalize_or_zero());
-        match (rest.next(), rest.next(), rest.next()) {
-            (Some(a), Some(b), None) if a != DVec3::ZERO && b != DVec3::ZERO => Some([a, b]),
-            _ => None,
-        }
-    };
-    let (a, b) = (ends(t)?, ends(other)?);
-    // The largest w·x over unit x in the cone spanned by `c`: at the projection of w on the
-    // cone's plane when that lies inside, else at an end.
-    let most = |c: [DVec3; 2], w: DVec3| {
-        let normal = c[0].cross(c[1]);
-        let ends = c[0].dot(w).max(c[1].dot(w));
-        let Some(normal) = normal.try_normalize() else { return ends };
-        let q = w - w.dot(normal) * normal;
-        let inside = c[0].cross(q).dot(normal) >= 0.0 && q.cross(c[1]).dot(normal) >= 0.0;
-        if inside && q.length_squared() > 0.0 { q.length().max(ends) } else { ends }
-    };
-    let h_max = most(b, sn) + 1e-12;
+fn corner_cone(gap: Option<f64>, theirs: &Cone, sn: DVec3) -> Option<f64> {
+    let h_max = theirs.most(sn) + 1e-12;
     if h_max <= 0.0 {
         return Some(f64::INFINITY);
     }
-    // cos γ: the closest pair has an end of one cone, or lies on both planes' common line.
-    let mut cos_gamma = [most(a, b[0]), most(a, b[1]), most(b, a[0]), most(b, a[1])].into_iter().fold(f64::NEG_INFINITY, f64::max);
-    if let Some(line) = a[0].cross(a[1]).cross(b[0].cross(b[1])).try_normalize() {
-        for l in [line, -line] {
-            if most(a, l) >= 1.0 - 1e-12 && most(b, l) >= 1.0 - 1e-12 {
-                cos_gamma = 1.0;
+    gap.map(|gap| gap / h_max)
+}
+
+/// A triangle's cone at its corner `v`: the unit directions of its two edges from `v`.
+#[derive(Clone, Copy, Debug)]
+struct Cone {
+    ends: [DVec3; 2],
+    /// `ends[0] × ends[1]`, and it normalised (`None` for a degenerate cone).
+    cross: DVec3,
+    normal: Option<DVec3>,
+}
+
+impl Cone {
+    /// `None` where the corners other than `v` are not two distinct points away from it.
+    fn at(t: &Triangle, v: DVec3) -> Option<Cone> {
+        let mut rest = t.p.iter().filter(|q| **q != v).map(|q| (*q - v).normalize_or_zero());
+        let ends = match (rest.next(), rest.next(), rest.next()) {
+            (Some(a), Some(b), None) if a != DVec3::ZERO && b != DVec3::ZERO => [a, b],
+            _ => return None,
+        };
+        let cross = ends[0].cross(ends[1]);
+        Some(Cone { ends, cross, normal: cross.try_normalize() })
+    }
+
+    /// The largest `w·x` over unit `x` in the cone: at the projection of `w` on the cone's plane
+    /// when that lies inside, else at an end.
+    fn most(&self, w: DVec3) -> f64 {
+        let c = self.ends;
+        let ends = c[0].dot(w).max(c[1].dot(w));
+        let Some(normal) = self.normal else { return ends };
+        let q = w - w.dot(normal) * normal;
+        let inside = c[0].cross(q).dot(normal) >= 0.0 && q.cross(c[1]).dot(normal) >= 0.0;
+        if inside && q.length_squared() > 0.0 { q.length().max(ends) } else { ends }
+    }
+
+    /// `1 − cos γ` for the least angle `γ` between this cone and `other` (at the same corner),
+    /// `None` where they touch: the closest pair has an end of one cone, or lies on both planes'
+    /// common line.
+    fn gap(&self, other: &Cone) -> Option<f64> {
+        let (a, b) = (self, other);
+        let mut cos_gamma = [a.most(b.ends[0]), a.most(b.ends[1]), b.most(a.ends[0]), b.most(a.ends[1])].into_iter().fold(f64::NEG_INFINITY, f64::max);
+        if let Some(line) = a.cross.cross(b.cross).try_normalize() {
+            for l in [line, -line] {
+                if a.most(l) >= 1.0 - 1e-12 && b.most(l) >= 1.0 - 1e-12 {
+                    cos_gamma = 1.0;
+                }
             }
         }
+        let gap = 1.0 - (cos_gamma + 1e-12).min(1.0);
+        (gap > 0.0).then_some(gap)
     }
-    let gap = 1.0 - (cos_gamma + 1e-12).min(1.0);
-    (gap > 0.0).then(|| gap / h_max)
 }
 
 /// The lower bound `dist(p, T') >= u·p − max_{y∈T'} u·y` of the distance to a competitor `T'`

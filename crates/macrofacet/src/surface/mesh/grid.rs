@@ -272,10 +272,11 @@ fn sign(x: f64) -> i32 {
 }
 
 /// Cell `c`'s list from the triangles within its reach (`candidates`: `(distance², index)` from
-/// the cell's centre, in any order: [`Bvh::within_distances`]), `d` the centre's distance to the mesh: those that can come
-/// within `d + r` (the farthest any cell point is from the mesh) of the cell, by the distance
-/// between bounding boxes and the distance from the triangle's plane (both bound the distance to
-/// the cell from below), nearest to the centre first (queries start from it; ties by index).
+/// the cell's centre, in any order: [`Bvh::within_distances`]), `d` the centre's distance to the
+/// mesh: those that can come within `d + r` (the farthest any cell point is from the mesh) of the
+/// cell, by the distance between bounding boxes and the distance from the triangle's plane (both
+/// bound the distance to the cell from below), nearest to the centre first (queries start from
+/// it; ties by index).
 fn cell_list(triangles: &[Triangle], c: IVec3, origin: DVec3, h: f64, d: f64, half_diagonal: f64, candidates: &[(f64, u32)]) -> Vec<u32> {
     let (lo, hi) = (origin + c.as_dvec3() * h, origin + (c.as_dvec3() + 1.0) * h);
     let centre = origin + (c.as_dvec3() + 0.5) * h;

@@ -161,7 +161,8 @@ impl FaceRegion {
                                 let (mine, theirs) = (cones[i][k]?, theirs_at(k)?);
                                 corner_cone(*cones_gap.get_or_insert_with(|| mine.gap(&theirs)), &theirs, s * n)
                             });
-                            factor.map_or(0.0, |c| c * (f * from_incentre[k]))
+                            // (∞: the neighbour lies beyond the corner's plane, at every margin.)
+                            factor.map_or(0.0, |c| if c == f64::INFINITY { c } else { c * (f * from_incentre[k]) })
                         }
                         None => 0.0,
                     };
@@ -294,7 +295,7 @@ struct Cone {
 }
 
 impl Cone {
-    /// `None` where the corners other than `v` are not two distinct points away from it.
+    /// `None` unless exactly two corners differ from `v` (a degenerate triangle's).
     fn at(t: &Triangle, v: DVec3) -> Option<Cone> {
         let mut rest = t.p.iter().filter(|q| **q != v).map(|q| (*q - v).normalize_or_zero());
         let ends = match (rest.next(), rest.next(), rest.next()) {

@@ -131,7 +131,7 @@ impl FaceRegion {
                 (Some(k), None) => Some(k),
                 _ => None,
             };
-            let theirs_at = |k: usize| other.p.iter().position(|q| *q == t.p[k]).and_then(|m| cones[j as usize][m]);
+            let their_cone_at = |k: usize| other.p.iter().position(|q| *q == t.p[k]).and_then(|m| cones[j as usize][m]);
             let mut cones_gap = None;
             // Directions u, each a valid lower bound: the plane of T (wholly on the far side:
             // no constraint), the plane of T' either way, and the direction between centroids.
@@ -158,10 +158,10 @@ impl FaceRegion {
                     let by_cone = match corner {
                         Some(k) => {
                             let factor = *per_distance.get_or_insert_with(|| {
-                                let (mine, theirs) = (cones[i][k]?, theirs_at(k)?);
-                                corner_cone(*cones_gap.get_or_insert_with(|| mine.gap(&theirs)), &theirs, s * n)
+                                let (my_cone, their_cone) = (cones[i][k]?, their_cone_at(k)?);
+                                corner_cone(*cones_gap.get_or_insert_with(|| my_cone.gap(&their_cone)), &their_cone, s * n)
                             });
-                            // (∞: the neighbour lies beyond the corner's plane, at every margin.)
+                            // (∞: the neighbour's cone lies beyond T's plane, at every margin.)
                             factor.map_or(0.0, |c| if c == f64::INFINITY { c } else { c * (f * from_incentre[k]) })
                         }
                         None => 0.0,

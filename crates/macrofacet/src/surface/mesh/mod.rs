@@ -884,6 +884,13 @@ mod tests {
     use crate::rng::Pcg32;
     use macrofacet_validation::common::meshes;
 
+    /// A uniformly distributed point of triangle `t`.
+    fn point_on(t: &Triangle, rng: &mut Pcg32) -> DVec3 {
+        let (u, v) = (rng.next_f64(), rng.next_f64());
+        let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+        t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0])
+    }
+
     /// Where a face region certifies a point, its projection is the triangle's closest point:
     /// the same point, coordinates and distance as the general test's up to rounding, on the
     /// face (points near the surface of a smooth torus, a lumpy one and an L prism, whose
@@ -897,9 +904,7 @@ mod tests {
             for _ in 0..20_000 {
                 let i = (rng.next_f64() * s.triangles.len() as f64) as u32;
                 let t = &s.triangles[i as usize];
-                let (u, v) = (rng.next_f64(), rng.next_f64());
-                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
-                let p = t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0]) + 0.05 * (2.0 * rng.next_f64() - 1.0).powi(3) * t.n;
+                let p = point_on(t, &mut rng) + 0.05 * (2.0 * rng.next_f64() - 1.0).powi(3) * t.n;
                 let Some(found) = s.regions[i as usize].certified_closest(t.n, p, i) else { continue };
                 certified += 1;
                 let exact = closest_on_triangle(t, p, i);
@@ -930,9 +935,7 @@ mod tests {
                 // grown by half the extent on each side.
                 let p = if n % 2 == 0 {
                     let t = &s.triangles[(rng.next_f64() * s.triangles.len() as f64) as usize];
-                    let (u, v) = (rng.next_f64(), rng.next_f64());
-                    let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
-                    t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0]) + 0.1 * extent * (2.0 * rng.next_f64() - 1.0) * t.n
+                    point_on(t, &mut rng) + 0.1 * extent * (2.0 * rng.next_f64() - 1.0) * t.n
                 } else {
                     let r = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
                     s.bounds.min - 0.5 * extent * DVec3::ONE + r * (s.bounds.max - s.bounds.min + extent * DVec3::ONE)

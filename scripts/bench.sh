@@ -106,6 +106,34 @@ start=$(date +%s%N)
 end=$(date +%s%N)
 echo "default scene (480x270, 20 spp, $(nproc) threads): $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", (b - a) / 1e9 }') s wall (target <= 8 s)"
 
+# Building a large mesh surface (mf_surface_new_mesh), on one thread and on every core: a torus
+# of 65,536 triangles from scenes/make_torus.awk as a thin shell's mean surface (mfrender --check
+# builds the scene, its surfaces and boundaries, and renders nothing).
+awk -v R=1 -v r=0.4 -v U=256 -v V=128 -f scenes/make_torus.awk > "$out/large_torus.obj"
+cat > "$out/large_torus.xml" <<XML
+<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, -5, 2" target="0, 0, 0" up="0, 0, 1"/></transform>
+        <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="64"/></film>
+    </sensor>
+    <shape type="obj">
+        <string name="filename" value="large_torus.obj"/>
+        <bsdf type="null"/>
+        <medium type="macrofacet" name="interior">
+            <float name="sigma" value="0.001"/>
+            <string name="distribution" value="beckmann"/>
+            <float name="alpha" value="0.3"/>
+        </medium>
+    </shape>
+</scene>
+XML
+for threads in 1 "$(nproc)"; do
+    start=$(date +%s%N)
+    "$mfrender" "$out/large_torus.xml" --check --threads "$threads" >/dev/null
+    end=$(date +%s%N)
+    echo "mesh surface of 65,536 triangles, built on $threads thread(s): $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.2f", (b - a) / 1e9 }') s wall (scene setup)"
+done
+
 # The Mitsuba 3 plugin: the thin gold shell as a macrofacet medium vs the same sphere as
 # Mitsuba's roughconductor, both scalar_rgb, equal spp, one process (where the plugin is built:
 # python3 finds mitsuba 3.9.1 and nanobind, which this script installs unless MF_SETUP_MITSUBA=0).

@@ -44,7 +44,7 @@ const char* kUsage =
     "  --seed S       random seed (default: the sampler's seed, else 0); output is bit-identical\n"
     "                 for a given seed, whatever --threads is\n"
     "  --threads N    worker threads for rendering and for building the media's surfaces\n"
-    "                 and boundaries (default: all cores)\n"
+    "                 and boundaries, a single large mesh's on all of them (default: all cores)\n"
     "  --max-depth N  override the integrator's max_depth (-1 = unbounded)\n"
     "  -D name=value  define/override a <default> parameter used as $name in the scene\n"
     "  --media-boundaries  trace the boundaries of macrofacet media in vacuum as surfaces of the\n"

@@ -31,9 +31,10 @@ class Medium;
 /// An mf_surface handle, freed on destruction. Immutable; shared by all render threads.
 class MeanSurface {
 public:
-    /// The mean surface of `shape` (a sphere or a closed mesh); throws mf::Error at the shape's
+    /// The mean surface of `shape` (a sphere or a closed mesh), a mesh's built on up to `threads`
+    /// threads (mf_surface_new_mesh; its enclosures use as many); throws mf::Error at the shape's
     /// location otherwise.
-    static std::shared_ptr<const MeanSurface> of(const Shape& shape);
+    static std::shared_ptr<const MeanSurface> of(const Shape& shape, size_t threads = 1);
     ~MeanSurface();
     MeanSurface(const MeanSurface&) = delete;
     MeanSurface& operator=(const MeanSurface&) = delete;

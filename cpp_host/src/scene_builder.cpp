@@ -132,9 +132,16 @@ private:
         std::exception_ptr error;
     };
 
-    void build_region(PendingRegion& r) {
+    /// The threads scene building may use (--threads, else one per core; at most the library's
+    /// MF_MAX_BUILD_THREADS for a mesh).
+    size_t build_threads() const {
+        const size_t wanted = opts_.threads > 0 ? size_t(opts_.threads) : std::max(1u, std::thread::hardware_concurrency());
+        return std::min<size_t>(wanted, MF_MAX_BUILD_THREADS);
+    }
+
+    void build_region(PendingRegion& r, size_t threads) {
         try {
-            auto surface = MeanSurface::of(*r.shape);
+            auto surface = MeanSurface::of(*r.shape, threads);
             if (r.gpis) {
                 auto g = create_gpis_medium(*r.bag, surface);
                 r.boundary = make_region_boundary(r.shape, *surface, g->envelope(), g);
@@ -150,11 +157,14 @@ private:
     }
 
     void finish_regions(ErrorSink& errors) {
-        const size_t hardware = std::max(1u, std::thread::hardware_concurrency());
-        const size_t n_threads = std::min(pending_.size(), opts_.threads > 0 ? size_t(opts_.threads) : hardware);
+        // One region per thread; fewer regions than threads share the rest within each
+        // (a single large mesh builds on all of them).
+        const size_t total = build_threads();
+        const size_t n_threads = std::min(pending_.size(), total);
+        const size_t per_region = std::max<size_t>(1, total / std::max<size_t>(1, pending_.size()));
         std::atomic<size_t> next{0};
         auto work = [&] {
-            for (size_t i; (i = next.fetch_add(1)) < pending_.size();) build_region(pending_[i]);
+            for (size_t i; (i = next.fetch_add(1)) < pending_.size();) build_region(pending_[i], per_region);
         };
         std::vector<std::thread> pool;
         for (size_t t = 1; t < n_threads; ++t) pool.emplace_back(work);
@@ -893,7 +903,7 @@ private:
             if (ms.type != "sphere" && ms.get_bool("flip_normals", false))  // as the plugin
                 throw perr(ms, "flip_normals", "is not allowed on a mesh mean surface (its triangles' winding defines the interior)");
             ms.check_all_used();  // the mean surface is geometry only
-            auto m = create_macrofacet_medium(*bag, MeanSurface::of(*mean));
+            auto m = create_macrofacet_medium(*bag, MeanSurface::of(*mean, build_threads()));
             scene_->media.push_back(m);
             it = boundary_media_.emplace(bag.get(), m).first;
         }

@@ -134,7 +134,8 @@ fn mesh(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<(Surface
     if debug {
         eprintln!("mesh: positions {positions:?} indices {indices:?} normals {normals:?} uvs {uvs:?} {mesh:?}");
     }
-    check::call(|o| unsafe { mf_surface_new_mesh(&mesh, o) }).ok().map(|s| (Surface(s), exact))
+    // (One thread: the fuzzer's meshes are small, and the count does not change the surface.)
+    check::call(|o| unsafe { mf_surface_new_mesh(&mesh, 1, o) }).ok().map(|s| (Surface(s), exact))
 }
 
 /// A signed-distance grid of a sphere filling most of the unit cube, `n³` samples (n from 2),

@@ -8,11 +8,13 @@
 
 #include <macrofacet.h>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <limits>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include "library.h"
@@ -34,10 +36,12 @@ public:
         return std::shared_ptr<const MeanSurface>(new MeanSurface(h, "sphere", true, {}));
     }
 
-    /// A closed triangle mesh in world space (see mf_mesh; the arrays are copied).
+    /// A closed triangle mesh in world space (see mf_mesh; the arrays are copied), built on one
+    /// thread per core (mf_surface_new_mesh; the same surface whatever the count).
     static std::shared_ptr<const MeanSurface> mesh(const mf_mesh& mesh, const std::string& kind) {
         mf_surface* h = nullptr;
-        check(mf_surface_new_mesh(&mesh, &h), "not a valid mean surface");
+        const size_t threads = std::max(1u, std::thread::hardware_concurrency());
+        check(mf_surface_new_mesh(&mesh, threads, &h), "not a valid mean surface");
         return std::shared_ptr<const MeanSurface>(new MeanSurface(h, kind, mesh.uvs != nullptr, {}));
     }
 

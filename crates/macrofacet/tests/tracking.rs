@@ -26,7 +26,7 @@ fn medium(ndf: Ndf, sigma: f64) -> MacrofacetMedium {
 }
 
 fn mesh_surface(m: &Mesh) -> TriangleMesh {
-    TriangleMesh::new(&m.positions, &m.indices, m.normals.as_deref(), None::<&[DVec2]>).unwrap()
+    TriangleMesh::new(&m.positions, &m.indices, m.normals.as_deref(), None::<&[DVec2]>, 1).unwrap()
 }
 
 /// `τ(t)` along a ray by Gauss–Legendre panels of `σ/20`, tabulated at the panel edges up to
@@ -920,8 +920,8 @@ fn surface_points_carry_mitsuba_uv() {
     let octa: Vec<DVec3> = [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z].into();
     let tris = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
     let uvs: Vec<DVec2> = (0..6).map(|i| DVec2::new(0.1 * i as f64, 1.0 - 0.15 * i as f64)).collect();
-    let with_uv = TriangleMesh::new(&octa, &tris, None, Some(&uvs)).unwrap();
-    let without = TriangleMesh::new(&octa, &tris, None, None).unwrap();
+    let with_uv = TriangleMesh::new(&octa, &tris, None, Some(&uvs), 1).unwrap();
+    let without = TriangleMesh::new(&octa, &tris, None, None, 1).unwrap();
     // Above the centroid of face (0, 2, 4): barycentrics 1/3 each.
     let p = (DVec3::X + DVec3::Y + DVec3::Z) / 3.0 * 1.2;
     let expect = (uvs[0] + uvs[2] + uvs[4]) / 3.0;
@@ -1229,6 +1229,7 @@ fn an_opaque_core_is_opaque() {
         &[[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]],
         None,
         None::<&[DVec2]>,
+        1,
     )
     .unwrap();
     let media = core_media();

@@ -33,7 +33,7 @@ def _library():
         path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib", "libmacrofacet.so")
         lib = ctypes.CDLL(path)
         vp = ctypes.c_void_p
-        lib.mf_surface_new_mesh.argtypes = [ctypes.POINTER(_Mesh), ctypes.POINTER(vp)]
+        lib.mf_surface_new_mesh.argtypes = [ctypes.POINTER(_Mesh), ctypes.c_size_t, ctypes.POINTER(vp)]
         lib.mf_surface_enclosure.argtypes = [vp, vp, ctypes.c_double, ctypes.c_double, ctypes.POINTER(vp)]
         lib.mf_enclosure_mesh.argtypes = [vp, ctypes.POINTER(_Mesh)]
         lib.mf_enclosure_free.argtypes = [vp]
@@ -65,7 +65,8 @@ def enclosure(positions, faces, level, cell_size=0.0):
     idx = (ctypes.c_uint32 * (3 * nf))(*faces)
     desc = _Mesh(pos, nv, idx, nf, None, None)
     surface, enc = ctypes.c_void_p(), ctypes.c_void_p()
-    _check(lib.mf_surface_new_mesh(ctypes.byref(desc), ctypes.byref(surface)), "the mesh is not a valid mean surface")
+    threads = min(os.cpu_count() or 1, 1024)  # (the same surface whatever the count)
+    _check(lib.mf_surface_new_mesh(ctypes.byref(desc), threads, ctypes.byref(surface)), "the mesh is not a valid mean surface")
     try:
         _check(lib.mf_surface_enclosure(surface, None, float(level), float(cell_size), ctypes.byref(enc)),
                "mf_surface_enclosure")

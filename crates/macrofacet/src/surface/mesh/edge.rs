@@ -13,6 +13,7 @@
 use super::bvh::Bvh;
 use crate::surface::Curvature;
 use super::triangle::{closest_on_triangle, segment_parameter, Triangle};
+use crate::parallel;
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -44,9 +45,10 @@ impl EdgeZone {
     const NONE: EdgeZone = EdgeZone { neighbour: u32::MAX, radius: [0.0; LEVELS], curvature: None };
 
     /// The zones of every triangle's edges (edge `k` runs from corner `k` to `k + 1`), in the
-    /// triangles' order. `corners[i]` are triangle `i`'s welded vertex ids (triangles that share
-    /// an edge share its two ids); `epsilon` is the rounding scale of the coordinates.
-    pub fn build(bvh: &Bvh, triangles: &[Triangle], corners: &[[u32; 3]], epsilon: f64) -> Vec<[EdgeZone; 3]> {
+    /// triangles' order, on up to `threads` threads. `corners[i]` are triangle `i`'s welded
+    /// vertex ids (triangles that share an edge share its two ids); `epsilon` is the rounding
+    /// scale of the coordinates.
+    pub fn build(bvh: &Bvh, triangles: &[Triangle], corners: &[[u32; 3]], epsilon: f64, threads: usize) -> Vec<[EdgeZone; 3]> {
         let key = |i: usize, k: usize| {
             let (u, v) = (corners[i][k], corners[i][(k + 1) % 3]);
             (u.min(v), u.max(v))
@@ -57,15 +59,21 @@ impl EdgeZone {
                 uses.entry(key(i, k)).or_default().push((i as u32, k));
             }
         }
-        let mut zones = vec![[EdgeZone::NONE; 3]; triangles.len()];
-        let mut near = Vec::new();
-        for sides in uses.values() {
-            let &[(i, k), (j, l)] = sides.as_slice() else { continue };
+        // The edges of exactly two triangles, each once.
+        let pairs: Vec<[(u32, usize); 2]> = uses
+            .values()
+            .filter_map(|sides| match *sides.as_slice() {
+                [(i, k), (j, l)] => Some([(i, k), (j, l)]),
+                _ => None,
+            })
+            .collect();
+        let zones_of = parallel::map(pairs.len(), threads, Vec::new, |near, n| {
+            let [(i, k), (j, _)] = pairs[n];
             let (a, b) = (&triangles[i as usize], &triangles[j as usize]);
             if a.n == DVec3::ZERO || b.n == DVec3::ZERO || corners[i as usize][k] == corners[i as usize][(k + 1) % 3] {
-                continue;
+                return None;
             }
-            let radius = Self::radii(bvh, triangles, i, k, j, epsilon, &mut near);
+            let radius = Self::radii(bvh, triangles, i, k, j, epsilon, near);
             // The neighbour's corner off the edge, against this triangle's plane (the same sign
             // seen from either side of a consistently wound mesh).
             let edge = [a.p[k], a.p[(k + 1) % 3]];
@@ -81,8 +89,14 @@ impl EdgeZone {
                     None
                 }
             });
-            zones[i as usize][k] = EdgeZone { neighbour: j, radius, curvature };
-            zones[j as usize][l] = EdgeZone { neighbour: i, radius, curvature };
+            Some((radius, curvature))
+        });
+        let mut zones = vec![[EdgeZone::NONE; 3]; triangles.len()];
+        for (&[(i, k), (j, l)], zone) in pairs.iter().zip(zones_of) {
+            if let Some((radius, curvature)) = zone {
+                zones[i as usize][k] = EdgeZone { neighbour: j, radius, curvature };
+                zones[j as usize][l] = EdgeZone { neighbour: i, radius, curvature };
+            }
         }
         zones
     }

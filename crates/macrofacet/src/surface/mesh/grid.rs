@@ -10,6 +10,7 @@
 
 use super::bvh::Bvh;
 use super::triangle::{closest_on_triangle, Closest, Triangle};
+use crate::parallel;
 use glam::{DVec3, IVec3};
 
 /// Cells whose centre is farther than this many cells from the surface get no list (queries
@@ -41,8 +42,9 @@ pub(super) struct CellGrid {
 }
 
 impl CellGrid {
-    /// The grid over the mesh's bounds (`min`, `max`) with cells of about `cell`.
-    pub fn build(bvh: &Bvh, triangles: &[Triangle], min: DVec3, max: DVec3, cell: f64) -> CellGrid {
+    /// The grid over the mesh's bounds (`min`, `max`) with cells of about `cell`, on up to
+    /// `threads` threads (one block of the coarsest level at a time each).
+    pub fn build(bvh: &Bvh, triangles: &[Triangle], min: DVec3, max: DVec3, cell: f64, threads: usize) -> CellGrid {
         let extent = max - min;
         let mut h = cell.max((extent.x * extent.y * extent.z / MAX_CELLS).cbrt()).max(1e-12 * extent.max_element());
         // Blocks per axis with the band's padding; a flat mesh (no volume) of small triangles
@@ -53,71 +55,27 @@ impl CellGrid {
         }
         let band = BAND_CELLS * h;
         let origin = min - DVec3::splat(band + h);
-        let dims = blocks_of(h).as_ivec3() * BLOCK;
+        let blocks = blocks_of(h).as_ivec3();
+        let dims = blocks * BLOCK;
         let count = (dims.x as usize) * (dims.y as usize) * (dims.z as usize);
         let half_diagonal = 0.5 * 3f64.sqrt() * h;
+        let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
+        let block_of = |b: usize| {
+            let (x, y) = (b as i32 % blocks.x, b as i32 / blocks.x);
+            IVec3::new(x, y % blocks.y, y / blocks.y) * BLOCK
+        };
+        let built = parallel::map(blocks.element_product() as usize, threads, Vec::new, |near, b| {
+            descend(bvh, triangles, block_of(b), Level { origin, h, band, half_diagonal }, near)
+        });
         let mut lists_of: Vec<Vec<u32>> = vec![Vec::new(); count];
         let mut lower = vec![0f32; count];
-        // Rounded toward zero so that the f32 stays a lower bound.
-        let bound = |x: f64| -> f32 {
-            let y = x.max(0.0) as f32;
-            if f64::from(y) > x.max(0.0) { f32::from_bits(y.to_bits().saturating_sub(1)) } else { y }
-        };
-        let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
-        // A descent through blocks halving down to cells: a block whose centre is farther than
-        // the band plus the distance to its farthest cell's centre holds no band cell (a cell is
-        // in the band by its centre's distance), and bounds its cells' distances.
-        let blocks = dims / BLOCK;
-        // With each block, the triangle closest to its parent's centre: it seeds the search.
-        let mut stack: Vec<(IVec3, i32, Option<u32>)> = Vec::new();
-        for bz in 0..blocks.z {
-            for by in 0..blocks.y {
-                for bx in 0..blocks.x {
-                    stack.push((IVec3::new(bx, by, bz) * BLOCK, BLOCK, None));
-                }
+        for (b, block) in built.into_iter().enumerate() {
+            let first = block_of(b);
+            for (k, bound) in block.lower.iter().enumerate() {
+                lower[index(first + local(k))] = *bound;
             }
-        }
-        // A cell's list holds the triangles within this of its centre, `d` the centre's distance.
-        let reach_of = |d: f64| (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
-        let mut near = Vec::new();
-        while let Some((first, size, seed)) = stack.pop() {
-            let block_centre = origin + (first.as_dvec3() + 0.5 * size as f64) * h;
-            let seed = seed.map_or(Closest::NONE, |i| closest_on_triangle(&triangles[i as usize], block_centre, i));
-            let nearest = bvh.closest(triangles, block_centre, seed);
-            let d_block = nearest.distance_sq.sqrt();
-            // Its cells' centres lie within (size − 1) cell half diagonals of its centre.
-            let farthest_centre = half_diagonal * (size - 1) as f64;
-            if size > 1 && d_block - farthest_centre > band {
-                // Every point of a cell is at least d_block minus its distance from the centre.
-                for z in 0..size {
-                    for y in 0..size {
-                        for x in 0..size {
-                            let c = first + IVec3::new(x, y, z);
-                            let farthest = (origin + (c.as_dvec3() + 0.5) * h - block_centre).length() + half_diagonal;
-                            lower[index(c)] = bound((d_block - farthest) * (1.0 - 1e-9));
-                        }
-                    }
-                }
-                continue;
-            }
-            if size > 1 {
-                let half = size / 2;
-                for z in 0..2 {
-                    for y in 0..2 {
-                        for x in 0..2 {
-                            stack.push((first + IVec3::new(x, y, z) * half, half, Some(nearest.triangle)));
-                        }
-                    }
-                }
-                continue;
-            }
-            let (c, centre, d) = (first, block_centre, d_block);
-            lower[index(c)] = bound((d - half_diagonal) * (1.0 - 1e-9));
-            if d > band {
-                continue;
-            }
-            if bvh.within_distances(triangles, centre, reach_of(d), MAX_LIST, &mut near) {
-                lists_of[index(c)] = cell_list(triangles, c, origin, h, d, half_diagonal, &near);
+            for (k, list) in block.lists {
+                lists_of[index(first + local(usize::from(k)))] = list;
             }
         }
         let mut offsets = Vec::with_capacity(count + 1);
@@ -269,6 +227,94 @@ fn sign(x: f64) -> i32 {
     } else {
         0
     }
+}
+
+/// The grid's geometry, as the descent needs it.
+#[derive(Clone, Copy)]
+struct Level {
+    origin: DVec3,
+    /// The cells' edge.
+    h: f64,
+    /// Cells whose centre lies within this of the mesh get a list.
+    band: f64,
+    /// A cell's half diagonal.
+    half_diagonal: f64,
+}
+
+/// One block of the coarsest level: its cells' distance bounds (`BLOCK³`, x fastest) and the
+/// lists of its cells in the band (by their index in the block).
+struct Block {
+    lower: Vec<f32>,
+    lists: Vec<(u16, Vec<u32>)>,
+}
+
+/// Cell `k` of a block, from its first cell (x fastest).
+fn local(k: usize) -> IVec3 {
+    let k = k as i32;
+    IVec3::new(k % BLOCK, (k / BLOCK) % BLOCK, k / (BLOCK * BLOCK))
+}
+
+/// The descent through one coarsest block (its first cell `first`), halving down to cells: a
+/// block whose centre is farther than the band plus the distance to its farthest cell's centre
+/// holds no band cell (a cell is in the band by its centre's distance), and bounds its cells'
+/// distances. `near`: scratch space.
+fn descend(bvh: &Bvh, triangles: &[Triangle], first: IVec3, level: Level, near: &mut Vec<(f64, u32)>) -> Block {
+    let Level { origin, h, band, half_diagonal } = level;
+    let mut out = Block { lower: vec![0f32; (BLOCK * BLOCK * BLOCK) as usize], lists: Vec::new() };
+    let slot = |c: IVec3| {
+        let k = c - first;
+        ((k.z * BLOCK + k.y) * BLOCK + k.x) as usize
+    };
+    // Rounded toward zero so that the f32 stays a lower bound.
+    let bound = |x: f64| -> f32 {
+        let y = x.max(0.0) as f32;
+        if f64::from(y) > x.max(0.0) { f32::from_bits(y.to_bits().saturating_sub(1)) } else { y }
+    };
+    // A cell's list holds the triangles within this of its centre, `d` the centre's distance.
+    let reach_of = |d: f64| (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
+    // With each block, the triangle closest to its parent's centre: it seeds the search.
+    let mut stack: Vec<(IVec3, i32, Option<u32>)> = vec![(first, BLOCK, None)];
+    while let Some((first, size, seed)) = stack.pop() {
+        let block_centre = origin + (first.as_dvec3() + 0.5 * size as f64) * h;
+        let seed = seed.map_or(Closest::NONE, |i| closest_on_triangle(&triangles[i as usize], block_centre, i));
+        let nearest = bvh.closest(triangles, block_centre, seed);
+        let d_block = nearest.distance_sq.sqrt();
+        // Its cells' centres lie within (size − 1) cell half diagonals of its centre.
+        let farthest_centre = half_diagonal * (size - 1) as f64;
+        if size > 1 && d_block - farthest_centre > band {
+            // Every point of a cell is at least d_block minus its distance from the centre.
+            for z in 0..size {
+                for y in 0..size {
+                    for x in 0..size {
+                        let c = first + IVec3::new(x, y, z);
+                        let farthest = (origin + (c.as_dvec3() + 0.5) * h - block_centre).length() + half_diagonal;
+                        out.lower[slot(c)] = bound((d_block - farthest) * (1.0 - 1e-9));
+                    }
+                }
+            }
+            continue;
+        }
+        if size > 1 {
+            let half = size / 2;
+            for z in 0..2 {
+                for y in 0..2 {
+                    for x in 0..2 {
+                        stack.push((first + IVec3::new(x, y, z) * half, half, Some(nearest.triangle)));
+                    }
+                }
+            }
+            continue;
+        }
+        let (c, centre, d) = (first, block_centre, d_block);
+        out.lower[slot(c)] = bound((d - half_diagonal) * (1.0 - 1e-9));
+        if d > band {
+            continue;
+        }
+        if bvh.within_distances(triangles, centre, reach_of(d), MAX_LIST, near) {
+            out.lists.push((slot(c) as u16, cell_list(triangles, c, origin, h, d, half_diagonal, near)));
+        }
+    }
+    out
 }
 
 /// Cell `c`'s list from the triangles within its reach (`candidates`: `(distance², index)` from

@@ -96,6 +96,8 @@ pub struct TriangleMesh {
     /// Each triangle's corners as welded vertex ids (one per distinct position): the mesh's
     /// connectivity, for [`offset`].
     corners: Vec<[u32; 3]>,
+    /// The threads its constructions may use (at least 1; the offset enclosures' too).
+    threads: usize,
 }
 
 /// Candidate triangles of the current segment (see the module documentation).
@@ -111,8 +113,10 @@ pub struct MeshCache {
 
 impl TriangleMesh {
     /// Builds the surface from world-space positions, triangles (vertex indices, counter-clockwise
-    /// seen from outside), and optional per-vertex unit normals and texture coordinates.
-    pub fn new(positions: &[DVec3], indices: &[[u32; 3]], normals: Option<&[DVec3]>, uvs: Option<&[DVec2]>) -> Result<TriangleMesh> {
+    /// seen from outside), and optional per-vertex unit normals and texture coordinates, on up to
+    /// `threads` threads (the calling one among them; 0 counts as 1), which its offset enclosures
+    /// use too. The surface is the same whatever the thread count.
+    pub fn new(positions: &[DVec3], indices: &[[u32; 3]], normals: Option<&[DVec3]>, uvs: Option<&[DVec2]>, threads: usize) -> Result<TriangleMesh> {
         let invalid = |m: String| Error::new(ErrorKind::InvalidArgument, m);
         if indices.is_empty() {
             return Err(invalid("the mesh has no triangles".into()));
@@ -288,13 +292,14 @@ impl TriangleMesh {
         let triangles: Vec<Triangle> = order.iter().map(|&i| triangles[i as usize].clone()).collect();
         let attributes: Vec<Attributes> = order.iter().map(|&i| attributes[i as usize].clone()).collect();
         let (min, max) = bvh.bounds();
-        let grid = CellGrid::build(&bvh, &triangles, min, max, CELL_EDGES * mean_edge);
+        let threads = threads.max(1);
+        let grid = CellGrid::build(&bvh, &triangles, min, max, CELL_EDGES * mean_edge, threads);
         let bounds = Aabb { min, max };
         let epsilon = 1e-13 * (bounds.max - bounds.min).max_element().max(bounds.max.abs().max(bounds.min.abs()).max_element()).max(1e-300);
-        let regions = FaceRegion::build(&bvh, &triangles, epsilon);
+        let regions = FaceRegion::build(&bvh, &triangles, epsilon, threads);
         let welded_corners: Vec<[u32; 3]> = order.iter().map(|&i| corners(&indices[i as usize])).collect();
-        let edges = EdgeZone::build(&bvh, &triangles, &welded_corners, epsilon);
-        Ok(TriangleMesh { triangles, attributes, bvh, grid, regions, edges, bounds, epsilon, corners: welded_corners })
+        let edges = EdgeZone::build(&bvh, &triangles, &welded_corners, epsilon, threads);
+        Ok(TriangleMesh { triangles, attributes, bvh, grid, regions, edges, bounds, epsilon, corners: welded_corners, threads })
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -899,7 +904,7 @@ mod tests {
     fn certified_projections_are_the_closest_points() {
         let mut rng = Pcg32::new(23, 4);
         for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 32, 16)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15)), ("l_prism", meshes::l_prism())] {
-            let s = TriangleMesh::new(&mesh.positions, &mesh.indices, mesh.normals.as_deref(), None).unwrap();
+            let s = TriangleMesh::new(&mesh.positions, &mesh.indices, mesh.normals.as_deref(), None, 1).unwrap();
             let mut certified = 0;
             for _ in 0..20_000 {
                 let i = (rng.next_f64() * s.triangles.len() as f64) as u32;
@@ -927,7 +932,7 @@ mod tests {
     fn grid_lists_hold_the_closest_triangle_and_its_bounds_hold() {
         let mut rng = Pcg32::new(41, 6);
         for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 32, 16)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15)), ("l_prism", meshes::l_prism()), ("cube", meshes::cube())] {
-            let s = TriangleMesh::new(&mesh.positions, &mesh.indices, None, None).unwrap();
+            let s = TriangleMesh::new(&mesh.positions, &mesh.indices, None, None, 1).unwrap();
             let extent = (s.bounds.max - s.bounds.min).max_element();
             let (mut listed, mut bounded) = (0, 0);
             for n in 0..8000 {
@@ -955,6 +960,26 @@ mod tests {
         }
     }
 
+    /// A mesh built on several threads is the one built on one: its face regions, grid, edge
+    /// zones and offset enclosure (a smooth torus with vertex normals, a lumpy one, and an L
+    /// prism, whose few triangles keep to one thread).
+    #[test]
+    fn the_thread_count_does_not_change_the_surface() {
+        for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 32, 16)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 48, 24, 0.15)), ("l_prism", meshes::l_prism())] {
+            let build = |threads| TriangleMesh::new(&mesh.positions, &mesh.indices, mesh.normals.as_deref(), None, threads).unwrap();
+            let one = build(1);
+            for threads in [2, 3, 8] {
+                let many = build(threads);
+                let same = |what: &str, a: String, b: String| assert!(a == b, "{name}: the {what} differ on {threads} threads");
+                same("triangles", format!("{:?}", one.triangles), format!("{:?}", many.triangles));
+                same("face regions", format!("{:?}", one.regions), format!("{:?}", many.regions));
+                same("grids", format!("{:?}", one.grid), format!("{:?}", many.grid));
+                same("edge zones", format!("{:?}", one.edges), format!("{:?}", many.edges));
+                same("offset enclosures", format!("{:?}", one.offset_enclosure(0.01)), format!("{:?}", many.offset_enclosure(0.01)));
+            }
+        }
+    }
+
     /// In an edge's zone the dihedral bound holds `f` and the frame's `d·n` along the whole
     /// segment, where the point queries of the whole mesh find one of the edge's two triangles:
     /// short segments across edges near the surface of a smooth torus (with its vertex normals
@@ -965,7 +990,7 @@ mod tests {
         for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 32, 16)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15)), ("cube", meshes::cube())] {
             for shaded in [true, false] {
                 let normals = mesh.normals.as_deref().filter(|_| shaded);
-                let s = TriangleMesh::new(&mesh.positions, &mesh.indices, normals, None).unwrap();
+                let s = TriangleMesh::new(&mesh.positions, &mesh.indices, normals, None, 1).unwrap();
                 let (mut checked, mut in_zone) = (0, 0);
                 for _ in 0..6000 {
                     let i = (rng.next_f64() * s.triangles.len() as f64) as usize;

@@ -29,6 +29,7 @@ use super::bvh::Bvh;
 use super::edge::segment_distance;
 use super::triangle::Triangle;
 use super::TriangleMesh;
+use crate::parallel;
 use crate::surface::{Enclosure, MeanSurface};
 use glam::DVec3;
 use smallvec::SmallVec;
@@ -103,11 +104,11 @@ impl TriangleMesh {
         if self.triangles.iter().zip(&faces).any(|(t, o)| t.n != DVec3::ZERO && !(o.n.dot(t.n) >= TURNED_COS)) {
             return None;
         }
-        let mut near = Vec::new();
-        if !faces.iter().all(|o| self.clears(o, required, &mut near)) {
+        let cleared = parallel::map(faces.len(), self.threads, Vec::new, |near, i| self.clears(&faces[i], required, near));
+        if !cleared.iter().all(|&c| c) {
             return None;
         }
-        if !embedded(&faces, &self.corners, magnitude, &mut near) {
+        if !embedded(&faces, &self.corners, magnitude, self.threads) {
             return None;
         }
         if !self.encloses(&faces, &vertices, &offset, level) {
@@ -202,11 +203,12 @@ impl TriangleMesh {
 /// opposite edge reaches the other (two triangles that share one vertex and overlap along a
 /// segment from it have the segment's far end on one's opposite edge); sharing an edge, they have
 /// not folded onto each other.
-fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, near: &mut Vec<u32>) -> bool {
+fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, threads: usize) -> bool {
     let apart = 1e-9 * magnitude;
     let (bvh, order) = Bvh::build(faces);
     let sorted: Vec<Triangle> = order.iter().map(|&i| faces[i as usize].clone()).collect();
-    faces.iter().enumerate().all(|(a, fa)| {
+    let embedded_at = parallel::map(faces.len(), threads, Vec::new, |near, a| {
+        let fa = &faces[a];
         if !bvh.within(&sorted, fa.centre, fa.radius + apart, MAX_NEIGHBOURS, near) {
             return false;
         }
@@ -230,7 +232,8 @@ fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, near: &mut
                 _ => false,
             }
         })
-    })
+    });
+    embedded_at.iter().all(|&e| e)
 }
 
 /// Whether triangles `a` and `b` lie at least `gap` apart: one wholly beyond the other's plane by
@@ -307,9 +310,8 @@ mod tests {
             (vec![t([o, x, y]), t([x, o, -y + z])], vec![[0, 1, 2], [1, 0, 3]], true),
             (vec![t([o, x, y]), t([x, o, DVec3::new(0.4, 0.4, 1e-3)])], vec![[0, 1, 2], [1, 0, 3]], false),
         ];
-        let mut near = Vec::new();
         for (k, (faces, corners, expected)) in cases.iter().enumerate() {
-            assert_eq!(embedded(faces, corners, 1.0, &mut near), *expected, "case {k}");
+            assert_eq!(embedded(faces, corners, 1.0, 1), *expected, "case {k}");
         }
     }
 
@@ -330,7 +332,7 @@ mod tests {
         let corners: Vec<DVec3> = (0..8).map(|i| DVec3::new([-1.0, 1.0][i & 1], [-1.0, 1.0][(i >> 1) & 1], [-1.0, 1.0][i >> 2])).collect();
         let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
         let triangles: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
-        let cube = TriangleMesh::new(&corners, &triangles, None, None).unwrap();
+        let cube = TriangleMesh::new(&corners, &triangles, None, None, 1).unwrap();
         for (scale, expected) in [(0.7, false), (1.3, true)] {
             let (vertices, _) = cube.welded_vertices();
             let offset: Vec<DVec3> = vertices.iter().map(|&v| v * scale).collect();
@@ -345,7 +347,7 @@ mod tests {
     fn offset_needs_blunt_vertices_and_a_positive_level() {
         let tetrahedron = |apex: f64| {
             let p = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(-0.5, 0.8660254, 0.0), DVec3::new(-0.5, -0.8660254, 0.0), DVec3::new(0.0, 0.0, apex)];
-            TriangleMesh::new(&p, &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], None, None).unwrap()
+            TriangleMesh::new(&p, &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], None, None, 1).unwrap()
         };
         let blunt = tetrahedron(1.0);
         let e = blunt.offset_enclosure(0.01).expect("a blunt tetrahedron offsets");

@@ -22,6 +22,7 @@
 use super::bvh::Bvh;
 use super::triangle::{Closest, Feature, Triangle};
 use crate::frame::rescaled;
+use crate::parallel;
 use glam::DVec3;
 
 /// Margins from the edges, as fractions of the inradius: a larger margin keeps segments away
@@ -63,13 +64,13 @@ impl FaceRegion {
     /// Certifies nothing (no point is that far inside).
     const NONE: FaceRegion = FaceRegion { inward: [DVec3::ZERO; 3], offset: [0.0; 3], inverse_altitude: [0.0; 3], plane: 0.0, margin: [f64::INFINITY; LEVELS], height: [[0.0; LEVELS]; 2] };
 
-    /// The certified regions of every triangle (in the hierarchy's order); `epsilon` is the
-    /// rounding scale of the coordinates, taken off every certified height.
-    pub fn build(bvh: &Bvh, triangles: &[Triangle], epsilon: f64) -> Vec<FaceRegion> {
-        let (mut near, mut by_gap) = (Vec::new(), Vec::new());
+    /// The certified regions of every triangle (in the hierarchy's order), on up to `threads`
+    /// threads; `epsilon` is the rounding scale of the coordinates, taken off every certified
+    /// height.
+    pub fn build(bvh: &Bvh, triangles: &[Triangle], epsilon: f64, threads: usize) -> Vec<FaceRegion> {
         // Every triangle's cones at its corners, once (each serves all the neighbours there).
         let cones: Vec<[Option<Cone>; 3]> = triangles.iter().map(|t| t.p.map(|v| Cone::at(t, v))).collect();
-        (0..triangles.len()).map(|i| Self::of(bvh, triangles, &cones, i, epsilon, &mut near, &mut by_gap)).collect()
+        parallel::map(triangles.len(), threads, || (Vec::new(), Vec::new()), |(near, by_gap), i| Self::of(bvh, triangles, &cones, i, epsilon, near, by_gap))
     }
 
     /// `near` and `by_gap`: scratch space, reused from triangle to triangle.

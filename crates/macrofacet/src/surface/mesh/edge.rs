@@ -132,8 +132,8 @@ impl EdgeZone {
     }
 
     /// The longest piece `[0, l]`, `l <= length`, of the segment `p + s d` in the zone of edge
-    /// `k` of `t`, to within [`PIECE_STEPS`] halvings of `length` (the capsule is convex: its
-    /// points along the ray form one interval, found by bisection); `None` when `p` lies outside
+    /// `k` of `t`: up to where the ray leaves the capsule ([`capsule_exit`]), moved back by a
+    /// relative `1e-12` against rounding, its end checked inside; `None` when `p` lies outside
     /// or the piece is shorter than `min_piece`.
     pub fn piece(&self, t: &Triangle, k: usize, p: DVec3, d: DVec3, length: f64, min_piece: f64) -> Option<f64> {
         // The capsule lies within its radius of the triangle's plane (most points of a thick
@@ -146,32 +146,64 @@ impl EdgeZone {
             let r = self.radius[level];
             let (s0, s1) = middle(t, k, level);
             let inside = |s: f64| point_segment_distance(p + s * d, s0, s1) <= r;
-            // (Both ends of the shortest piece wanted, before any bisection.)
-            if !(r > 0.0 && inside(0.0) && inside(min_piece)) {
+            if !(r > 0.0 && inside(0.0)) {
                 continue;
             }
-            if inside(length) {
+            let piece = (capsule_exit(p, d, s0, s1, r) * (1.0 - 1e-12)).min(length);
+            if !(piece >= min_piece && inside(piece)) {
+                continue;
+            }
+            if piece == length {
                 return Some(length);
             }
-            let (mut lo, mut hi) = (min_piece, length);
-            for _ in 0..PIECE_STEPS {
-                let mid = 0.5 * (lo + hi);
-                if inside(mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            if best.map_or(true, |b| lo > b) {
-                best = Some(lo);
-            }
+            best = Some(best.map_or(piece, |b: f64| b.max(piece)));
         }
         best
     }
 }
 
-/// Bisection steps of [`EdgeZone::piece`]: a piece is found to within 2⁻¹² of the segment.
-const PIECE_STEPS: u32 = 12;
+/// Where the ray `p + s d`, `s >= 0`, leaves the capsule of radius `r` around the segment
+/// `s0 s1`, for `p` inside it. The capsule is convex, the union of its cylinder (within the
+/// segment's span) and its two end balls, each convex too: the ray's interval in it is the union
+/// of its intervals in them, and ends where the last of those does.
+fn capsule_exit(p: DVec3, d: DVec3, s0: DVec3, s1: DVec3, r: f64) -> f64 {
+    // The real roots of |q + s v|² = r², in order (none: an empty interval).
+    let roots = |q: DVec3, v: DVec3| -> (f64, f64) {
+        let (a, b, c) = (v.length_squared(), q.dot(v), q.length_squared() - r * r);
+        if a > 0.0 {
+            let disc = b * b - a * c;
+            if disc >= 0.0 {
+                let root = disc.sqrt();
+                return ((-b - root) / a, (-b + root) / a);
+            }
+        } else if c <= 0.0 {
+            return (f64::NEG_INFINITY, f64::INFINITY);
+        }
+        (f64::INFINITY, f64::NEG_INFINITY)
+    };
+    let mut end = [s0, s1].iter().map(|&centre| roots(p - centre, d).1).fold(f64::NEG_INFINITY, f64::max);
+    let axis = s1 - s0;
+    let span = axis.length();
+    if span > 0.0 {
+        let u = axis / span;
+        let (along, rate) = ((p - s0).dot(u), d.dot(u));
+        // Within the span: 0 <= along + s rate <= span.
+        let (lo, hi) = if rate != 0.0 {
+            let (a, b) = (-along / rate, (span - along) / rate);
+            (a.min(b), a.max(b))
+        } else if (0.0..=span).contains(&along) {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        } else {
+            (f64::INFINITY, f64::NEG_INFINITY)
+        };
+        // Within the radius of the axis: the components across it.
+        let (across_lo, across_hi) = roots((p - s0) - along * u, d - rate * u);
+        if lo.max(across_lo) <= hi.min(across_hi) {
+            end = end.max(hi.min(across_hi));
+        }
+    }
+    end.max(0.0)
+}
 
 /// The middle part of edge `k` of `t` at margin `level`.
 fn middle(t: &Triangle, k: usize, level: usize) -> (DVec3, DVec3) {
@@ -236,6 +268,31 @@ mod tests {
     use super::super::triangle::from_corners;
     use super::*;
     use crate::rng::Pcg32;
+
+    /// A ray from inside a capsule leaves it where the closed form says: just before, inside;
+    /// just after, outside (random capsules, some degenerate to a ball, and rays of any length).
+    #[test]
+    fn capsule_exit_is_where_the_ray_leaves() {
+        let mut rng = Pcg32::new(5, 9);
+        let mut point = |scale: f64| DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5) * scale;
+        let mut checked = 0;
+        for k in 0..20_000 {
+            let s0 = point(2.0);
+            let s1 = if k % 10 == 0 { s0 } else { s0 + point(2.0) };
+            let r = 0.05 + 0.5 * (point(1.0).x + 0.5);
+            let p = s0 + (s1 - s0) * (point(1.0).x + 0.5) + point(2.0 * r);
+            if point_segment_distance(p, s0, s1) > r {
+                continue;
+            }
+            let d = point(1.0).normalize() * if k % 3 == 0 { 1.0 } else { 3.0 };
+            let end = capsule_exit(p, d, s0, s1, r);
+            let tol = 1e-9 * (1.0 + end * d.length());
+            assert!(point_segment_distance(p + end * d, s0, s1) <= r + tol, "case {k}: the exit {end} lies outside");
+            assert!(point_segment_distance(p + (end + 1e-6) * d, s0, s1) > r - tol, "case {k}: the ray is still inside past the exit {end}");
+            checked += 1;
+        }
+        assert!(checked > 5000, "{checked} rays checked");
+    }
 
     /// The segment–triangle distance is the least over dense samples of the segment (which can
     /// only be larger, by at most half a sample step), and never above it.

@@ -202,7 +202,8 @@ impl TriangleMesh {
 /// vertex ids): apart, they keep more than a rounding distance; sharing a vertex, neither's
 /// opposite edge reaches the other (two triangles that share one vertex and overlap along a
 /// segment from it have the segment's far end on one's opposite edge); sharing an edge, they have
-/// not folded onto each other.
+/// not folded onto each other. Each face's pairs on one of up to `threads` threads (all of them
+/// checked, as the clearance's: a failing offset costs what a passing one does).
 fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, threads: usize) -> bool {
     let apart = 1e-9 * magnitude;
     let (bvh, order) = Bvh::build(faces);

@@ -65,7 +65,9 @@ def enclosure(positions, faces, level, cell_size=0.0):
     idx = (ctypes.c_uint32 * (3 * nf))(*faces)
     desc = _Mesh(pos, nv, idx, nf, None, None)
     surface, enc = ctypes.c_void_p(), ctypes.c_void_p()
-    threads = min(os.cpu_count() or 1, 1024)  # (the same surface whatever the count)
+    # One per core, at most the library's MF_MAX_BUILD_THREADS (1024; more is refused); the same
+    # surface whatever the count.
+    threads = min(os.cpu_count() or 1, 1024)
     _check(lib.mf_surface_new_mesh(ctypes.byref(desc), threads, ctypes.byref(surface)), "the mesh is not a valid mean surface")
     try:
         _check(lib.mf_surface_enclosure(surface, None, float(level), float(cell_size), ctypes.byref(enc)),

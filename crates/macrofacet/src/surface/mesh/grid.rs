@@ -272,10 +272,11 @@ fn descend(bvh: &Bvh, triangles: &[Triangle], first: IVec3, level: Level, near: 
     };
     // A cell's list holds the triangles within this of its centre, `d` the centre's distance.
     let reach_of = |d: f64| (d + 2.0 * half_diagonal) * (1.0 + 1e-9) + 1e-12 * h;
-    // With each block, the triangle closest to its parent's centre: it seeds the search.
+    // Each block by its first cell (`corner`) and size, with the triangle closest to its parent's
+    // centre: it seeds the search.
     let mut stack: Vec<(IVec3, i32, Option<u32>)> = vec![(first, BLOCK, None)];
-    while let Some((first, size, seed)) = stack.pop() {
-        let block_centre = origin + (first.as_dvec3() + 0.5 * size as f64) * h;
+    while let Some((corner, size, seed)) = stack.pop() {
+        let block_centre = origin + (corner.as_dvec3() + 0.5 * size as f64) * h;
         let seed = seed.map_or(Closest::NONE, |i| closest_on_triangle(&triangles[i as usize], block_centre, i));
         let nearest = bvh.closest(triangles, block_centre, seed);
         let d_block = nearest.distance_sq.sqrt();
@@ -286,7 +287,7 @@ fn descend(bvh: &Bvh, triangles: &[Triangle], first: IVec3, level: Level, near: 
             for z in 0..size {
                 for y in 0..size {
                     for x in 0..size {
-                        let c = first + IVec3::new(x, y, z);
+                        let c = corner + IVec3::new(x, y, z);
                         let farthest = (origin + (c.as_dvec3() + 0.5) * h - block_centre).length() + half_diagonal;
                         out.lower[slot(c)] = bound((d_block - farthest) * (1.0 - 1e-9));
                     }
@@ -299,13 +300,13 @@ fn descend(bvh: &Bvh, triangles: &[Triangle], first: IVec3, level: Level, near: 
             for z in 0..2 {
                 for y in 0..2 {
                     for x in 0..2 {
-                        stack.push((first + IVec3::new(x, y, z) * half, half, Some(nearest.triangle)));
+                        stack.push((corner + IVec3::new(x, y, z) * half, half, Some(nearest.triangle)));
                     }
                 }
             }
             continue;
         }
-        let (c, centre, d) = (first, block_centre, d_block);
+        let (c, centre, d) = (corner, block_centre, d_block);
         out.lower[slot(c)] = bound((d - half_diagonal) * (1.0 - 1e-9));
         if d > band {
             continue;

@@ -183,10 +183,11 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
 
     while (true) {
         // Inside a medium that finds the ray's exit itself (Medium::finds_exits), the ray is cast
-        // against the shapes near its region only: not for the boundary's exit, then beyond.
+        // against the shapes near its region only: not for the boundary's exit, then beyond; and
+        // only after the flight, up to where it ended (below).
         const bool to_exit = vol && medium && medium->finds_exits();
         SurfaceHit hit;
-        bool found = to_exit ? scene_.intersect_near(medium->near_scene(), ray, &hit) : scene_.intersect(ray, &hit);
+        bool found = !to_exit && scene_.intersect(ray, &hit);
 
         // ---- media: free flights up to the surface (or infinity). The superposed media and the
         // current one are independent exponential flights: the nearest collision wins, so each is
@@ -200,9 +201,19 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             const Medium* scattering = nullptr;
             bool exited = false;  // the ray left the region before the near shapes' hit
             if (to_exit) {
-                // Its collision, or its exit, bounds the superposed media's flights
+                // The flight first, unbounded: a free flight is memoryless, so one cut at the
+                // nearest shape is this one with its collision beyond the shape dropped. The near
+                // shapes are then cast against only up to its collision or exit, most often a
+                // box test (on bench/anchor.xml's torus, whose floor is near, these casts went
+                // from 12.5 M to 7.2 M instructions). Its collision, or its exit, or the shape
+                // bounds the superposed media's flights.
                 float t_end;
-                if (medium->sample_free_flight_to_exit(ray, tmax, sampler, mi_m, &t_end)) {
+                const bool collided = medium->sample_free_flight_to_exit(ray, kInf, sampler, mi_m, &t_end);
+                const float reach = std::min(collided ? mi_m->t : t_end, ray.tmax);
+                found = scene_.intersect_near(medium->near_scene(), Ray(ray.o, ray.d, ray.tmin, reach), &hit);
+                if (found) {
+                    tmax = hit.t;
+                } else if (collided) {
                     std::swap(mi, mi_m);
                     tmax = mi->t;
                     scattering = medium;

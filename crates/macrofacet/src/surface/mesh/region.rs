@@ -234,10 +234,14 @@ impl FaceRegion {
     /// The longest certified piece of the segment `p + s d`, `s ∈ [0, length]`, of triangle `t`
     /// (whose region this is); `None` when `p` is not certified.
     pub fn piece(&self, n: DVec3, p: DVec3, d: DVec3, length: f64) -> Option<Piece> {
+        // (Minima by comparison, not f64::min: nothing here is NaN for a validated point and
+        // direction, and f64::min's NaN handling cost ~4 instructions each, a fifth of the
+        // function on the torus anchor.)
+        let less = |a: f64, b: f64| if b < a { b } else { a };
         let e0 = self.edge_distances(p);
         let de = [0, 1, 2].map(|k| self.inward[k].dot(d));
         let (t0, dt) = (n.dot(p) - self.plane, n.dot(d));
-        let e_min = e0[0].min(e0[1]).min(e0[2]);
+        let e_min = less(less(e0[0], e0[1]), e0[2]);
         let mut best: Option<f64> = None;
         for level in (0..LEVELS).rev() {
             let m = self.margin[level];
@@ -248,14 +252,14 @@ impl FaceRegion {
             let mut reach = length;
             for k in 0..3 {
                 if de[k] < 0.0 {
-                    reach = reach.min((e0[k] - m) / -de[k]);
+                    reach = less(reach, (e0[k] - m) / -de[k]);
                 }
             }
             // The height moves linearly from t0 toward one side's limit.
             if dt > 0.0 {
-                reach = reach.min((above - t0) / dt);
+                reach = less(reach, (above - t0) / dt);
             } else if dt < 0.0 {
-                reach = reach.min((below + t0) / -dt);
+                reach = less(reach, (below + t0) / -dt);
             }
             // (No level reaches beyond the segment.)
             if reach >= length {

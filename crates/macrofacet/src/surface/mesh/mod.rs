@@ -32,7 +32,7 @@ use bvh::Bvh;
 use edge::EdgeZone;
 use glam::{DVec2, DVec3};
 use grid::CellGrid;
-use region::FaceRegion;
+use region::{less, more, FaceRegion};
 use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, Tangent};
 use smallvec::SmallVec;
 use std::collections::HashMap;
@@ -542,15 +542,16 @@ impl TriangleMesh {
                 let (m0, m1) = (m(start.barycentric), m(end.barycentric));
                 let dm = m1 - m0;
                 let foot = segment_parameter(DVec3::ZERO, m0, m1);
-                let min_len = (m0 + foot * dm).length().max(attributes.shading_min_length);
+                let min_len = more((m0 + foot * dm).length(), attributes.shading_min_length);
                 if !(min_len > 0.0) {
                     return Err((length, None));
                 }
-                let (a, b) = (d.dot(m0).min(d.dot(m1)), d.dot(m0).max(d.dot(m1)));
+                let (a, b) = (less(d.dot(m0), d.dot(m1)), more(d.dot(m0), d.dot(m1)));
                 // d·m lies in [a, b]; dividing by |m| ∈ [min_len, 1] can magnify it up to 1/min_len.
                 [if a < 0.0 { a / min_len } else { a }, if b > 0.0 { b / min_len } else { b }]
             }
         };
+        // (In a certified piece of a validated ray nothing is NaN: minima by comparison.)
         cache.candidates.clear();
         cache.candidates.push(i);
         cache.certified = true;
@@ -559,7 +560,7 @@ impl TriangleMesh {
             length: piece,
             f_lo: [plane[0] - pad, plane[1] - pad],
             f_hi: [plane[0] + pad, plane[1] + pad],
-            cos: [(cos[0] - 1e-12).max(-1.0), (cos[1] + 1e-12).min(1.0)],
+            cos: [more(cos[0] - 1e-12, -1.0), less(cos[1] + 1e-12, 1.0)],
             end: Some(self.surface_point(end_p, &end)),
         })
     }

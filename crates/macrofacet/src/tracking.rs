@@ -732,12 +732,13 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             if let Some(end) = bound.end {
                 end.validated(p + bound.length * d)?;
             }
-            // A side without a bound gets the surface's Lipschitz bound.
+            // A side without a bound gets the surface's Lipschitz bound (validated: only f_lo
+            // may be −∞ and only f_hi +∞).
             let lipschitz = SegmentBound::lipschitz(start.f, bound.length, self.surface.lipschitz());
-            if bound.f_lo.iter().any(|v| v.is_infinite()) {
+            if bound.f_lo.contains(&f64::NEG_INFINITY) {
                 bound.f_lo = lipschitz.f_lo;
             }
-            if bound.f_hi.iter().any(|v| v.is_infinite()) {
+            if bound.f_hi.contains(&f64::INFINITY) {
                 bound.f_hi = lipschitz.f_hi;
             }
             // The surface is queried at rounded points `origin + t d`: f there may differ from

@@ -49,9 +49,18 @@ pub(crate) fn expected_positive_part(w_z: f64, s: f64) -> f64 {
         // s below f64's resolution of w_z (erfcx(∞) = 0 would meet ∞): the limit s → 0.
         return w_z.max(0.0);
     }
+    if a >= NO_TAIL {
+        // The tail, e^{−a²}/(4 a² √π) to leading order (below 1e-18 here), is under half an ulp
+        // of `a`: `a + tail` is `a` exactly, without its `exp` and `erfcx` (most of a thin
+        // shell's σ_t evaluations look along the flakes' normals, where `a` is large).
+        return s * a;
+    }
     let tail = 0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a.abs() * erfcx(a.abs()));
     s * (a.max(0.0) + tail)
 }
+
+/// Where [`expected_positive_part`]'s tail no longer changes `a` (checked by a unit test).
+const NO_TAIL: f64 = 6.0;
 
 impl GaussianGradient {
     pub fn diagonal(alpha: DVec3) -> Self {
@@ -267,9 +276,9 @@ fn catmull_rom_weights(t: f64) -> [f64; 4] {
 
 #[cfg(test)]
 mod tests {
-    use super::{expected_positive_part, sample_shifted_linear_gaussian, tabulated_quantile};
+    use super::{expected_positive_part, sample_shifted_linear_gaussian, tabulated_quantile, FRAC_1_SQRT_PI, NO_TAIL};
     use crate::rng::Pcg32;
-    use crate::special::{normal_cdf, normal_pdf};
+    use crate::special::{erfcx, normal_cdf, normal_pdf};
 
     /// Inside the table's domain its starting point lies within the `1e-5 (1 + |x|)` of the
     /// quantile below which one Halley step is final, and the sampler's result (from it, or
@@ -306,6 +315,17 @@ mod tests {
 
     /// `E[max(0, w_z + s N/√2)]` is continuous down to `s = 0`, where it is `max(w_z, 0)`: also
     /// where `w_z / s` overflows, and it stays finite and increasing in `w_z` across `a = 0`.
+    #[test]
+    fn the_tail_is_below_an_ulp_beyond_no_tail() {
+        // Computed as below NO_TAIL, the tail leaves `a` unchanged from there on.
+        let mut a = NO_TAIL;
+        while a < 1e3 {
+            let tail = 0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a * erfcx(a));
+            assert_eq!(a + tail, a, "a = {a}: tail {tail:e}");
+            a = a * 1.001 + 1e-3;
+        }
+    }
+
     #[test]
     fn expected_positive_part_is_continuous_to_the_sharp_limit() {
         for w_z in [-0.5, -1e-300, 0.0, 1e-300, 0.5] {

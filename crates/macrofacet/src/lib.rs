@@ -36,6 +36,7 @@ pub mod limits;
 pub mod medium;
 pub mod ndf;
 pub mod opaque_core;
+pub(crate) mod ordered;
 pub(crate) mod parallel;
 pub mod params;
 pub mod phase;

@@ -32,6 +32,7 @@ use crate::height::HeightProfile;
 use crate::medium::MacrofacetMedium;
 use crate::ndf::{MicrofacetDistribution, Ndf, Side};
 use crate::opaque_core::{descent_transmittance_bound, opaque_core, OpaqueCore};
+use crate::ordered::{largest_magnitude, less, more};
 use crate::rng::Pcg32;
 use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
 use glam::DVec3;
@@ -633,13 +634,13 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         // Rays within ~7° of the surface are treated as grazing: the bound, not the cosine,
         // then limits the segment.
         let c = d.dot(start.normal);
-        let rate = c.abs().max(0.125);
+        let rate = more(c.abs(), 0.125);
         let approach = if start.f > top { (start.f - top) / rate } else { 0.0 };
         let length = approach + SEGMENT_SIGMAS * sigma / rate;
         match previous {
             Previous::None => length,
-            Previous::Empty(l) => length.max(2.0 * l),
-            Previous::Shortened(l) => length.min(2.0 * l),
+            Previous::Empty(l) => more(length, 2.0 * l),
+            Previous::Shortened(l) => less(length, 2.0 * l),
         }
     }
 
@@ -717,7 +718,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     #[inline(always)]
     fn next_segment(&self, t: f64, p: DVec3, start: &SurfacePoint, d: DVec3, remaining: f64, previous: Previous, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<Segment> {
         let sigma = self.height().sigma;
-        let mut length = self.segment_length(start, d, previous).min(remaining);
+        let mut length = less(self.segment_length(start, d, previous), remaining);
         let mut shortenings = 0;
         // The length last halved for looseness, with its looseness; whether that was in vain.
         let (mut longer, mut in_vain): (Option<(f64, f64)>, bool) = (None, false);
@@ -746,7 +747,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             // linear in between since |q|∞ and t are (found by fuzzing: σ = 1e-50 at
             // |p| ~ 1e-37 broke a plane's exact majorant; so did t = 1e225 from an origin at
             // z = −1e225, where the points near z = −4e221 were off by an ulp of t, 1.5e209).
-            let rounding = [(p, t), (p + bound.length * d, t + bound.length)].map(|(q, t)| POSITION_ROUNDING * (q.abs().max_element() + t));
+            let rounding = [(p, t), (p + bound.length * d, t + bound.length)].map(|(q, t)| POSITION_ROUNDING * (largest_magnitude(q) + t));
             if rounding.iter().all(|r| r.is_finite()) {
                 bound.f_lo = [bound.f_lo[0] - rounding[0], bound.f_lo[1] - rounding[1]];
                 bound.f_hi = [bound.f_hi[0] + rounding[0], bound.f_hi[1] + rounding[1]];
@@ -754,6 +755,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             // How far below f the lower bound falls at the ends (what costs tentative collisions),
             // against the end point's f when the surface gave it, else the upper bound.
             let f_end = bound.end.map_or(bound.f_hi[1], |e| e.f);
+            // (f64::max: an infinite f at the start, far outside a mesh, makes a difference NaN.)
             let looseness = (start.f - bound.f_lo[0]).max(f_end - bound.f_lo[1]);
             // A halving in vain is undone, asking for the longer segment again (a surface's cache
             // follows its last bound): kept, it would repeat on every segment, as the next one,
@@ -785,7 +787,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             // A wide range of σ inflates the majorant by (σ_hi/σ_lo)²: shorter segments see a
             // narrower range (unless the segment lies above the shell, where nothing scatters),
             // as long as halving helps (a field's own resolution sets a floor).
-            let (factor, above) = (params.density_factor(), bound.f_lo[0].min(bound.f_lo[1]) > shape.top());
+            let (factor, above) = (params.density_factor(), less(bound.f_lo[0], bound.f_lo[1]) > shape.top());
             if factor > MAX_DENSITY_FACTOR && factor < 0.95 * last_factor && !above && field_shortenings < MAX_FIELD_SHORTENINGS && bound.length == length {
                 field_shortenings += 1;
                 last_factor = factor;
@@ -864,7 +866,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
 
     /// True when the segment's majorant is zero throughout: it lies above the shell.
     fn is_empty(&self, seg: &Segment) -> bool {
-        seg.s_up == 0.0 || seg.bound.f_lo[0].min(seg.bound.f_lo[1]) > seg.shape.top()
+        seg.s_up == 0.0 || less(seg.bound.f_lo[0], seg.bound.f_lo[1]) > seg.shape.top()
     }
 
     /// The majorant `μ(s)` of a segment at `s`.

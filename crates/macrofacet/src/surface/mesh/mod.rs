@@ -28,11 +28,12 @@ mod triangle;
 
 use super::{convex_bound, Aabb, Curvature, MeanSurface, SegmentBound, SurfacePoint};
 use crate::error::{Error, ErrorKind, Result};
+use crate::ordered::{less, more};
 use bvh::Bvh;
 use edge::EdgeZone;
 use glam::{DVec2, DVec3};
 use grid::CellGrid;
-use region::{less, more, FaceRegion};
+use region::FaceRegion;
 use lines::{best_lower_line, closest_of, lower_lines, may_be_closest, positive_until, retain_flagged, Tangent};
 use smallvec::SmallVec;
 use std::collections::HashMap;

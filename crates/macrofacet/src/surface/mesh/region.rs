@@ -22,6 +22,7 @@
 use super::bvh::Bvh;
 use super::triangle::{Closest, Feature, Triangle};
 use crate::frame::rescaled;
+use crate::ordered::less;
 use crate::parallel;
 use glam::DVec3;
 
@@ -52,28 +53,6 @@ pub(super) struct FaceRegion {
     /// Certified heights above (`[0]`) and below (`[1]`) the face for each margin; 0 where
     /// nothing is certified (degenerate triangles).
     height: [[f64; LEVELS]; 2],
-}
-
-/// The smaller of `a` and `b`, which are not NaN (a validated point's and direction's edge
-/// distances and reaches): a comparison, where `f64::min`'s NaN handling costs ~4 instructions
-/// more (in `piece` a fifth of the function on the torus anchor).
-#[inline]
-pub(super) fn less(a: f64, b: f64) -> f64 {
-    if b < a {
-        b
-    } else {
-        a
-    }
-}
-
-/// The larger of `a` and `b`, which are not NaN (as [`less`]).
-#[inline]
-pub(super) fn more(a: f64, b: f64) -> f64 {
-    if b > a {
-        b
-    } else {
-        a
-    }
 }
 
 /// A certified piece of a segment: `f` is the plane distance of its triangle along it.

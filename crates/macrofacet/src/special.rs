@@ -253,7 +253,7 @@ mod normal_table;
 #[inline]
 fn normal_piece(x: f64) -> Option<(usize, f64)> {
     use normal_table::{LN_CDF, PER_UNIT, X_HI, X_LO};
-    if !(x >= X_LO && x < X_HI) {
+    if !(X_LO..X_HI).contains(&x) {
         return None;
     }
     let s = x - X_LO;

@@ -2,8 +2,8 @@
 //! and bounds): one comparison, where `f64::min` and `f64::max` also handle NaN operands
 //! (IEEE `minNum`), ~4 instructions more each. On the hot paths of tracking through a mesh they
 //! were a few percent of the instructions (docs/performance.md, session 30). Where an operand
-//! may be NaN, keep `f64::min`/`f64::max`: these return the second operand for a NaN first
-//! one and the first for a NaN second one.
+//! may be NaN, keep `f64::min`/`f64::max`, which return the other operand; `less` and `more`
+//! return their first operand whenever either is NaN.
 
 /// The smaller of `a` and `b`, neither NaN.
 #[inline]

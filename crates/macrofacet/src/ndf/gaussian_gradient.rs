@@ -313,11 +313,9 @@ mod tests {
         assert_eq!(tabulated_quantile(8.5, 0.5), None);
     }
 
-    /// `E[max(0, w_z + s N/√2)]` is continuous down to `s = 0`, where it is `max(w_z, 0)`: also
-    /// where `w_z / s` overflows, and it stays finite and increasing in `w_z` across `a = 0`.
+    /// The tail, computed as below [`NO_TAIL`], leaves `a` unchanged from there on.
     #[test]
     fn the_tail_is_below_an_ulp_beyond_no_tail() {
-        // Computed as below NO_TAIL, the tail leaves `a` unchanged from there on.
         let mut a = NO_TAIL;
         while a < 1e3 {
             let tail = 0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a * erfcx(a));
@@ -326,6 +324,8 @@ mod tests {
         }
     }
 
+    /// `E[max(0, w_z + s N/√2)]` is continuous down to `s = 0`, where it is `max(w_z, 0)`: also
+    /// where `w_z / s` overflows, and it stays finite and increasing in `w_z` across `a = 0`.
     #[test]
     fn expected_positive_part_is_continuous_to_the_sharp_limit() {
         for w_z in [-0.5, -1e-300, 0.0, 1e-300, 0.5] {

@@ -26,6 +26,7 @@ import os
 import sys
 
 from mpmath import mp, mpf
+from polynomial_pieces import estrin, interpolant, rust_array
 
 mp.dps = 40
 
@@ -46,23 +47,7 @@ def erfcx_of_y(y):
 
 
 def piece(i):
-    a, b = mpf(i) / PIECES, mpf(i + 1) / PIECES
-    nodes = [mp.cos(mp.pi * (k + mpf(1) / 2) / (DEGREE + 1)) for k in range(DEGREE + 1)]
-    values = [erfcx_of_y((a + b) / 2 + (b - a) / 2 * z) for z in nodes]
-    vandermonde = mp.matrix([[z ** j for j in range(DEGREE + 1)] for z in nodes])
-    coefficients = mp.lu_solve(vandermonde, mp.matrix(values))
-    return [float(coefficients[j]) for j in range(DEGREE + 1)]
-
-
-def estrin(c, z):
-    """special.rs's `estrin`, operation for operation (Python floats are f64; Rust does not fuse
-    `a * b + c`)."""
-    z2 = z * z
-    z4 = z2 * z2
-    z8 = z4 * z4
-    p01, p23, p45, p67, p89 = c[0] + c[1] * z, c[2] + c[3] * z, c[4] + c[5] * z, c[6] + c[7] * z, c[8] + c[9] * z
-    p03, p47, p8a = p01 + p23 * z2, p45 + p67 * z2, p89 + c[10] * z2
-    return (p03 + p47 * z4) + p8a * z8
+    return interpolant(erfcx_of_y, mpf(i) / PIECES, mpf(i + 1) / PIECES, DEGREE)
 
 
 def exact_at_zero(coefficients):
@@ -106,13 +91,7 @@ def main():
         f"pub(super) const PIECES: f64 = {PIECES}.0;",
         f"pub(super) const SCALE: f64 = {SCALE}.0;",
         f"pub(super) const FIRST: usize = {first};",
-        f"pub(super) const COEFFICIENTS: [[f64; {DEGREE + 1}]; {len(table)}] = [",
-    ]
-    for coefficients in table:
-        lines.append("    [")
-        lines.extend(f"        {c!r}," for c in coefficients)
-        lines.append("    ],")
-    lines.append("];")
+    ] + rust_array("COEFFICIENTS", table)
     with open(out, "w") as f:
         f.write("\n".join(lines) + "\n")
 

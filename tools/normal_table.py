@@ -12,7 +12,8 @@ Regenerate (deterministic; needs only mpmath, tested with mpmath 1.3.0):
 `[X_LO, X_HI)` is cut into `PER_UNIT` equal intervals per unit of `x`; on interval `i` the local
 variable is `z = 2 (PER_UNIT (x - X_LO) - i) - 1` in `[-1, 1]`, and each function is its
 Chebyshev interpolant of degree `DEGREE` at the `DEGREE + 1` Chebyshev nodes, written in powers
-of `z` (evaluated by Estrin's scheme, as `erfcx`'s pieces: tools/erfcx_table.py).
+of `z` (evaluated by Estrin's scheme, as `erfcx`'s pieces: tools/erfcx_table.py; both scripts
+share tools/polynomial_pieces.py).
 
 The interpolants are computed at 40 digits and rounded to f64. The script checks each one at
 `CHECK` points per interval against mpmath and prints the largest relative error of the f64
@@ -24,6 +25,7 @@ import os
 import sys
 
 from mpmath import mp, mpf
+from polynomial_pieces import estrin, interpolant, rust_array
 
 mp.dps = 40
 
@@ -40,25 +42,9 @@ FUNCTIONS = [
 ]
 
 
-def estrin(c, z):
-    """special.rs's `estrin`, operation for operation (Python floats are f64; Rust does not fuse
-    `a * b + c`)."""
-    z2 = z * z
-    z4 = z2 * z2
-    z8 = z4 * z4
-    p01, p23, p45, p67, p89 = c[0] + c[1] * z, c[2] + c[3] * z, c[4] + c[5] * z, c[6] + c[7] * z, c[8] + c[9] * z
-    p03, p47, p8a = p01 + p23 * z2, p45 + p67 * z2, p89 + c[10] * z2
-    return (p03 + p47 * z4) + p8a * z8
-
-
 def piece(fn, i):
     a = mpf(X_LO) + mpf(i) / PER_UNIT
-    b = a + mpf(1) / PER_UNIT
-    nodes = [mp.cos(mp.pi * (k + mpf(1) / 2) / (DEGREE + 1)) for k in range(DEGREE + 1)]
-    values = [fn((a + b) / 2 + (b - a) / 2 * z) for z in nodes]
-    vandermonde = mp.matrix([[z ** j for j in range(DEGREE + 1)] for z in nodes])
-    coefficients = mp.lu_solve(vandermonde, mp.matrix(values))
-    return [float(coefficients[j]) for j in range(DEGREE + 1)]
+    return interpolant(fn, a, a + mpf(1) / PER_UNIT, DEGREE)
 
 
 def table(fn):
@@ -93,13 +79,7 @@ def main():
         lines += [
             "",
             f"/// {what}; largest relative error of the f64 evaluation against mpmath (40 digits): {worst:.3g}.",
-            f"pub(super) const {name}: [[f64; {DEGREE + 1}]; {len(pieces)}] = [",
-        ]
-        for coefficients in pieces:
-            lines.append("    [")
-            lines.extend(f"        {c!r}," for c in coefficients)
-            lines.append("    ],")
-        lines.append("];")
+        ] + rust_array(name, pieces)
     with open(out, "w") as f:
         f.write("\n".join(lines) + "\n")
 

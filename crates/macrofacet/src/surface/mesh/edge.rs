@@ -127,7 +127,7 @@ impl EdgeZone {
     }
 
     /// The largest radius over the margins.
-    fn widest(&self) -> f64 {
+    pub fn widest(&self) -> f64 {
         self.radius.iter().copied().fold(0.0, f64::max)
     }
 
@@ -142,7 +142,9 @@ impl EdgeZone {
             return None;
         }
         let mut best: Option<f64> = None;
-        for level in 0..LEVELS {
+        // (The wider margin first: its shorter middle part has the wider capsule, which more
+        // often holds the whole segment.)
+        for level in (0..LEVELS).rev() {
             let r = self.radius[level];
             let (s0, s1) = middle(t, k, level);
             let inside = |s: f64| point_segment_distance(p + s * d, s0, s1) <= r;

@@ -498,14 +498,15 @@ impl TriangleMesh {
     /// The common case of a thin shell, in O(1): a piece of the segment inside the certified
     /// region of one triangle `T` ([`region`]), where `f` is exactly the signed distance to `T`'s
     /// plane and the frame normal is `T`'s interpolated vertex normal (affine along the piece)
-    /// or its face normal, of the triangle closest at `p` (the one recorded there, else a query).
-    /// Otherwise `Err` with the length the general bound should cover: where `p` is about to
+    /// or its face normal, of the triangle closest at `p` (the one recorded there, else a query);
+    /// a piece cut short where the ray leaves the region beside an edge goes on through that
+    /// edge's zone in the same bound ([`Self::through_zone`]). Otherwise `Err` with the length the general bound should cover: where `p` is about to
     /// cross the strip beside an edge that no triangle certifies (a ray passing from one
     /// triangle's region into its neighbour's), only that strip, whose few candidates make the
     /// general bound cheap; else the whole `length`. Or, where that begins in an edge's zone
     /// ([`edge`]), its piece in the zone with the edge's two triangles, the only candidates
     /// there.
-    fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, cache: &mut MeshCache) -> std::result::Result<SegmentBound, (f64, Option<ZonePair>)> {
+    fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> std::result::Result<SegmentBound, (f64, Option<ZonePair>)> {
         // A triangle recorded at `p` is the closest there (every query and bound records the
         // closest): asking again would find it, or one as close, again.
         let i = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::hint(cache)).triangle);
@@ -519,14 +520,7 @@ impl TriangleMesh {
             let general = region.strip_crossing(p, d).map_or(length, |strip| length.min(strip.max(MIN_PIECE * length)));
             // The longest piece of it in an edge's zone, if any: there the edge's two triangles
             // are the only candidates.
-            let mut best: Option<(f64, &EdgeZone)> = None;
-            for (k, zone) in self.edges[i as usize].iter().enumerate().filter(|(_, zone)| zone.neighbour != u32::MAX) {
-                if let Some(piece) = zone.piece(tri, k, p, d, general, MIN_PIECE * general) {
-                    if best.map_or(true, |(b, _)| piece > b) {
-                        best = Some((piece, zone));
-                    }
-                }
-            }
+            let best = self.zone_piece(i, p, d, general);
             return Err(best.map_or((general, None), |(piece, zone)| (piece, Some(([i, zone.neighbour], zone.curvature)))));
         }
         let end_p = p + piece * d;
@@ -553,17 +547,100 @@ impl TriangleMesh {
             }
         };
         // (In a certified piece of a validated ray nothing is NaN: minima by comparison.)
-        cache.candidates.clear();
-        cache.candidates.push(i);
-        cache.certified = true;
-        cache.hint = Some((end_p, i));
-        Ok(SegmentBound {
+        let bound = SegmentBound {
             length: piece,
             f_lo: [plane[0] - pad, plane[1] - pad],
             f_hi: [plane[0] + pad, plane[1] + pad],
             cos: [more(cos[0] - 1e-12, -1.0), less(cos[1] + 1e-12, 1.0)],
             end: Some(self.surface_point(end_p, &end)),
-        })
+        };
+        cache.candidates.clear();
+        // (Not for a piece that rises above the tolerance: the ray is then mostly leaving the
+        // shell, and the tracker would not use the rest.)
+        if piece < length && (plane[1] <= 0.5 * tolerance || tri.n.dot(d) <= 0.0) {
+            if let Some((merged, pair, end_closest)) = self.through_zone(i, p, d, length, &bound, &end) {
+                cache.candidates.extend_from_slice(&pair);
+                cache.certified = false;
+                cache.hint = Some((p + merged.length * d, end_closest.triangle));
+                return Ok(merged);
+            }
+        }
+        cache.candidates.push(i);
+        cache.certified = true;
+        cache.hint = Some((end_p, i));
+        Ok(bound)
+    }
+
+    /// The longest piece of the segment `p + s d`, `s ∈ [0, length]`, in a zone of triangle
+    /// `i`'s edges ([`edge`]), with its zone.
+    fn zone_piece(&self, i: u32, p: DVec3, d: DVec3, length: f64) -> Option<(f64, &EdgeZone)> {
+        let mut best: Option<(f64, &EdgeZone)> = None;
+        for k in 0..3 {
+            if let Some((piece, zone)) = self.edge_zone_piece(i, k, p, d, length) {
+                if best.map_or(true, |(b, _)| piece > b) {
+                    best = Some((piece, zone));
+                }
+            }
+        }
+        best
+    }
+
+    /// [`Self::zone_piece`] in the zone of edge `k` alone.
+    fn edge_zone_piece(&self, i: u32, k: usize, p: DVec3, d: DVec3, length: f64) -> Option<(f64, &EdgeZone)> {
+        let zone = &self.edges[i as usize][k];
+        // Only a zone whose edge's line lies within its widest radius of `p` can hold it
+        // (`|e_k|` bounds the distance to that line from below): the other zones' tests cost a
+        // thin shell's crossings more than their bounds.
+        if zone.neighbour == u32::MAX || !(self.regions[i as usize].edge_distance(k, p).abs() <= zone.widest() * (1.0 + 1e-9) + self.epsilon) {
+            return None;
+        }
+        Some((zone.piece(&self.triangles[i as usize], k, p, d, length, MIN_PIECE * length)?, zone))
+    }
+
+    /// A certified piece of triangle `i` from `p` (`piece`, shorter than the `length` asked
+    /// for) continued in the same segment through the zone of an edge that holds its end
+    /// ([`edge`]): there `f` is bounded by [`Self::dihedral_bound`], on the piece it is the
+    /// plane's exact line. One line below both (above both) bounds `f` on the whole segment
+    /// where it lies below (above) each at the ends of each part, the lines being straight on
+    /// each: the line from the piece's start to the zone part's end, moved down (up) by what
+    /// it lacks where the parts meet. (At a convex edge the certified plane's line is the
+    /// dihedral's tangent there, and nothing moves.) Saves the tracker a segment and the zone's
+    /// search for where it starts: a thin shell's crossing of an edge cost three segments (the
+    /// piece, the zone, the next triangle's piece). Returns the bound, the zone's two triangles
+    /// and the closest point at the end; `None` where no zone holds the piece's end or the
+    /// dihedral bound does not apply there.
+    fn through_zone(&self, i: u32, p: DVec3, d: DVec3, length: f64, piece: &SegmentBound, piece_end: &Closest) -> Option<(SegmentBound, [u32; 2], Closest)> {
+        let s1 = piece.length;
+        let q1 = p + s1 * d;
+        // The piece ended where the ray left the region across its nearest edge (or at its
+        // height, where the nearest edge's zone may still hold it).
+        let e = [0, 1, 2].map(|k| self.regions[i as usize].edge_distance(k, q1));
+        let nearest = if e[0] <= e[1] && e[0] <= e[2] { 0 } else if e[1] <= e[2] { 1 } else { 2 };
+        let (zone_length, zone) = self.edge_zone_piece(i, nearest, q1, d, length - s1)?;
+        let pair = [i, zone.neighbour];
+        // (Rounded, the sum may pass the length asked for by an ulp.)
+        let s2 = less(s1 + zone_length, length);
+        let end_p = p + s2 * d;
+        let end_closest = closest_among(&self.triangles, end_p, &pair, Closest::NONE);
+        let end = self.surface_point(end_p, &end_closest);
+        // (At `q1` the piece's triangle is closest, at its projection.)
+        let at_start = [*piece_end, closest_on_triangle(&self.triangles[pair[1] as usize], q1, pair[1])];
+        let zone_bound = self.dihedral_bound(piece.end.as_ref()?, &at_start, &end, &end_closest, q1, d, zone_length, pair, zone.curvature?)?;
+        // The lines at the parts' meeting point `s1`, and the straight line from the start to
+        // the end: how far it lies above the lower bounds there (below the upper).
+        let at_s1 = |ends: [f64; 2]| ends[0] + (ends[1] - ends[0]) * (s1 / s2);
+        let f_lo = [piece.f_lo[0], zone_bound.f_lo[1]];
+        let f_hi = [piece.f_hi[0], zone_bound.f_hi[1]];
+        let lower_by = (at_s1(f_lo) - less(piece.f_lo[1], zone_bound.f_lo[0])).max(0.0);
+        let raise_by = (more(piece.f_hi[1], zone_bound.f_hi[0]) - at_s1(f_hi)).max(0.0);
+        let merged = SegmentBound {
+            length: s2,
+            f_lo: f_lo.map(|f| f - lower_by),
+            f_hi: f_hi.map(|f| f + raise_by),
+            cos: [less(piece.cos[0], zone_bound.cos[0]), more(piece.cos[1], zone_bound.cos[1])],
+            end: Some(end),
+        };
+        Some((merged, pair, end_closest))
     }
 }
 
@@ -574,9 +651,10 @@ impl TriangleMesh {
     /// that of the gradient or, with vertex normals, of both triangles' interpolated normals (as
     /// in the general bound). `None` where an end lies so near the surface that its gradient's
     /// direction is rounding (as the general bound's tangents), and the general bound decides.
-    /// `end` is the surface point at the end, `end_closest` its closest point.
+    /// `at_start` are the closest points of the two triangles to `p`, `end` is the surface point
+    /// at the end, `end_closest` its closest point.
     #[allow(clippy::too_many_arguments)]
-    fn dihedral_bound(&self, start: &SurfacePoint, end: &SurfacePoint, end_closest: &Closest, p: DVec3, d: DVec3, length: f64, pair: [u32; 2], curvature: Curvature) -> Option<SegmentBound> {
+    fn dihedral_bound(&self, start: &SurfacePoint, at_start: &[Closest; 2], end: &SurfacePoint, end_closest: &Closest, p: DVec3, d: DVec3, length: f64, pair: [u32; 2], curvature: Curvature) -> Option<SegmentBound> {
         let floor = start.f.abs().min(end.f.abs());
         if !(floor >= 2e-3 * length && floor > self.epsilon) {
             return None;
@@ -586,7 +664,6 @@ impl TriangleMesh {
             Feature::Face => Some(self.triangles[c.triangle as usize].n),
             _ => rescaled(q - c.point).try_normalize().map(|n| f.signum() * n),
         };
-        let at_start = pair.map(|i| closest_on_triangle(&self.triangles[i as usize], p, i));
         let start_closest = if closer(&at_start[1], &at_start[0]) { at_start[1] } else { at_start[0] };
         let (g0, g1) = (gradient(p, start.f, &start_closest)?, gradient(p + length * d, end.f, end_closest)?);
         let bound = convex_bound(&SurfacePoint { normal: g0, ..*start }, &SurfacePoint { normal: g1, ..*end }, d, length, curvature);
@@ -646,7 +723,7 @@ impl MeanSurface for TriangleMesh {
             cache.candidates.clear();
             Ok(self.far_bound(start, p, d, requested, tolerance, cache))
         };
-        let (length, pair) = match self.certified_bound(p, d, length, cache) {
+        let (length, pair) = match self.certified_bound(p, d, length, tolerance, cache) {
             Ok(bound) if bound.length < short && requested > short => {
                 // The certified piece's triangle is the closest at `p`: the far bound's chord
                 // starts from it. (Its end and candidate were recorded for a segment not taken.)
@@ -669,7 +746,8 @@ impl MeanSurface for TriangleMesh {
             cache.candidates.extend_from_slice(&pair);
             end_closest = closest_among(&self.triangles, end_p, &pair, Closest::NONE);
             let end = self.surface_point(end_p, &end_closest);
-            if let Some(bound) = curvature.and_then(|c| self.dihedral_bound(start, &end, &end_closest, p, d, length, pair, c)) {
+            let at_start = pair.map(|i| closest_on_triangle(&self.triangles[i as usize], p, i));
+            if let Some(bound) = curvature.and_then(|c| self.dihedral_bound(start, &at_start, &end, &end_closest, p, d, length, pair, c)) {
                 cache.hint = Some((end_p, end_closest.triangle));
                 return Ok(bound);
             }
@@ -982,6 +1060,35 @@ mod tests {
         }
     }
 
+    /// The meshes of the edge zones' tests, with their vertex normals and flat: a smooth torus,
+    /// a lumpy one (saddles, concave edges) and a cube (right-angled edges).
+    fn edge_test_surfaces() -> Vec<(&'static str, bool, TriangleMesh)> {
+        let meshes = [("torus", meshes::torus(1.0, 0.4, 32, 16)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15)), ("cube", meshes::cube())];
+        let mut surfaces = Vec::new();
+        for (name, mesh) in meshes {
+            for shaded in [true, false] {
+                let normals = mesh.normals.as_deref().filter(|_| shaded);
+                surfaces.push((name, shaded, TriangleMesh::new(&mesh.positions, &mesh.indices, normals, None, 1).unwrap()));
+            }
+        }
+        surfaces
+    }
+
+    /// `bound` holds the mesh's `f` and the frame's `d·n` at 41 points of its segment from `p`,
+    /// where `also` checks each point too.
+    fn assert_bound_holds(s: &TriangleMesh, name: &str, p: DVec3, d: DVec3, bound: &SegmentBound, also: impl Fn(DVec3)) {
+        let ((lo, lo_k), (hi, hi_k)) = (bound.lower_line(), bound.upper_line());
+        for step in 0..=40 {
+            let u = bound.length * step as f64 / 40.0;
+            let q = s.point(p + u * d).unwrap();
+            let tol = 1e-12 * (1.0 + q.f.abs());
+            assert!(q.f >= lo + lo_k * u - tol && q.f <= hi + hi_k * u + tol, "{name}: f = {} outside [{}, {}] at {u} of {}", q.f, lo + lo_k * u, hi + hi_k * u, bound.length);
+            let c = d.dot(q.normal);
+            assert!(c >= bound.cos[0] - 1e-9 && c <= bound.cos[1] + 1e-9, "{name}: d·n = {c} outside {:?}", bound.cos);
+            also(p + u * d);
+        }
+    }
+
     /// In an edge's zone the dihedral bound holds `f` and the frame's `d·n` along the whole
     /// segment, where the point queries of the whole mesh find one of the edge's two triangles:
     /// short segments across edges near the surface of a smooth torus (with its vertex normals
@@ -989,54 +1096,88 @@ mod tests {
     #[test]
     fn dihedral_bounds_hold_in_edge_zones() {
         let mut rng = Pcg32::new(17, 2);
-        for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 32, 16)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15)), ("cube", meshes::cube())] {
-            for shaded in [true, false] {
-                let normals = mesh.normals.as_deref().filter(|_| shaded);
-                let s = TriangleMesh::new(&mesh.positions, &mesh.indices, normals, None, 1).unwrap();
-                let (mut checked, mut in_zone) = (0, 0);
-                for _ in 0..6000 {
-                    let i = (rng.next_f64() * s.triangles.len() as f64) as usize;
-                    let k = (rng.next_f64() * 3.0) as usize;
-                    let zone = s.edges[i][k];
-                    let Some(curvature) = zone.curvature.filter(|_| zone.neighbour != u32::MAX) else { continue };
-                    let (t, j) = (&s.triangles[i], zone.neighbour);
-                    let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
-                    let edge = (b - a).length();
-                    let across = t.n.cross(b - a).normalize();
-                    let normal = (t.n + s.triangles[j as usize].n).normalize();
-                    let x = a + (0.05 + 0.9 * rng.next_f64()) * (b - a);
-                    let p = x + edge * ((rng.next_f64() - 0.5) * 0.04 * normal + (rng.next_f64() - 0.5) * 0.1 * across);
-                    let d = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
-                    let length = edge * 10f64.powf(-4.0 + 3.0 * rng.next_f64());
-                    let end_p = p + length * d;
-                    if zone.piece(t, k, p, d, length, length) != Some(length) {
-                        continue;
-                    }
-                    in_zone += 1;
-                    let start = s.point(p).unwrap();
-                    let end_closest = closest_among(&s.triangles, end_p, &[i as u32, j], Closest::NONE);
-                    let end = s.surface_point(end_p, &end_closest);
-                    // (The whole mesh's query may take the certified region's projection, the
-                    // same point up to rounding.)
-                    let query = s.point(end_p).unwrap();
-                    let same = (end.f - query.f).abs() <= 1e-12 * end.f.abs() + 1e-15 && (end.normal - query.normal).length() <= 1e-12;
-                    assert!(same, "{name}: the zone's pair missed the closest triangle: {end:?} against {query:?}");
-                    let Some(bound) = s.dihedral_bound(&start, &end, &end_closest, p, d, length, [i as u32, j], curvature) else { continue };
-                    checked += 1;
-                    let ((lo, lo_k), (hi, hi_k)) = (bound.lower_line(), bound.upper_line());
-                    for step in 0..=40 {
-                        let u = length * step as f64 / 40.0;
-                        let q = s.point(p + u * d).unwrap();
-                        let tol = 1e-12 * (1.0 + q.f.abs());
-                        assert!(q.f >= lo + lo_k * u - tol && q.f <= hi + hi_k * u + tol, "{name}: f = {} outside [{}, {}] at {u} of {length}", q.f, lo + lo_k * u, hi + hi_k * u);
-                        let c = d.dot(q.normal);
-                        assert!(c >= bound.cos[0] - 1e-9 && c <= bound.cos[1] + 1e-9, "{name} (shaded {shaded}): d·n = {c} outside {:?}", bound.cos);
-                    }
+        for (name, shaded, s) in edge_test_surfaces() {
+            let (mut checked, mut in_zone) = (0, 0);
+            for _ in 0..6000 {
+                let i = (rng.next_f64() * s.triangles.len() as f64) as usize;
+                let k = (rng.next_f64() * 3.0) as usize;
+                let zone = s.edges[i][k];
+                let Some(curvature) = zone.curvature.filter(|_| zone.neighbour != u32::MAX) else { continue };
+                let (t, j) = (&s.triangles[i], zone.neighbour);
+                let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
+                let edge = (b - a).length();
+                let across = t.n.cross(b - a).normalize();
+                let normal = (t.n + s.triangles[j as usize].n).normalize();
+                let x = a + (0.05 + 0.9 * rng.next_f64()) * (b - a);
+                let p = x + edge * ((rng.next_f64() - 0.5) * 0.04 * normal + (rng.next_f64() - 0.5) * 0.1 * across);
+                let d = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
+                let length = edge * 10f64.powf(-4.0 + 3.0 * rng.next_f64());
+                let end_p = p + length * d;
+                if zone.piece(t, k, p, d, length, length) != Some(length) {
+                    continue;
                 }
-                println!("{name} (shaded {shaded}): {checked} dihedral bounds of {in_zone} segments in zones");
-                // Not vacuous: most segments in a zone get the dihedral bound.
-                assert!(in_zone > 500 && checked * 10 > in_zone * 8, "{name} (shaded {shaded}): {checked} dihedral bounds of {in_zone} segments in zones");
+                in_zone += 1;
+                let start = s.point(p).unwrap();
+                let end_closest = closest_among(&s.triangles, end_p, &[i as u32, j], Closest::NONE);
+                let end = s.surface_point(end_p, &end_closest);
+                // (The whole mesh's query may take the certified region's projection, the
+                // same point up to rounding.)
+                let query = s.point(end_p).unwrap();
+                let same = (end.f - query.f).abs() <= 1e-12 * end.f.abs() + 1e-15 && (end.normal - query.normal).length() <= 1e-12;
+                assert!(same, "{name}: the zone's pair missed the closest triangle: {end:?} against {query:?}");
+                let at_start = [i as u32, j].map(|m| closest_on_triangle(&s.triangles[m as usize], p, m));
+                let Some(bound) = s.dihedral_bound(&start, &at_start, &end, &end_closest, p, d, length, [i as u32, j], curvature) else { continue };
+                checked += 1;
+                assert_bound_holds(&s, &format!("{name} (shaded {shaded})"), p, d, &bound, |_| ());
             }
+            println!("{name} (shaded {shaded}): {checked} dihedral bounds of {in_zone} segments in zones");
+            // Not vacuous: most segments in a zone get the dihedral bound.
+            assert!(in_zone > 500 && checked * 10 > in_zone * 8, "{name} (shaded {shaded}): {checked} dihedral bounds of {in_zone} segments in zones");
+        }
+    }
+
+    /// A certified piece continued through an edge's zone in one segment (`through_zone`) holds
+    /// `f` and the frame's `d·n` along the whole segment, where the point queries on it (the
+    /// edge's two triangles) find the whole mesh's closest: segments from inside a face's region
+    /// across one of its edges, on the meshes of `dihedral_bounds_hold_in_edge_zones`.
+    #[test]
+    fn bounds_through_edge_zones_hold() {
+        let mut rng = Pcg32::new(23, 5);
+        for (name, shaded, s) in edge_test_surfaces() {
+            let mut merged = 0;
+            for _ in 0..20_000 {
+                let i = (rng.next_f64() * s.triangles.len() as f64) as usize;
+                let k = (rng.next_f64() * 3.0) as usize;
+                let t = &s.triangles[i];
+                let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
+                let edge = (b - a).length();
+                // Inward across edge k, in the plane.
+                let inward = t.n.cross(b - a).normalize();
+                let x = a + (0.1 + 0.8 * rng.next_f64()) * (b - a) + edge * 0.02 * rng.next_f64() * inward;
+                let p = x + edge * (rng.next_f64() - 0.5) * 0.02 * t.n;
+                // Heading out across the edge, at any angle to the plane.
+                let d = (-inward * (0.2 + rng.next_f64()) + (rng.next_f64() - 0.5) * (b - a).normalize() + (rng.next_f64() - 0.5) * 0.6 * t.n).normalize();
+                let length = edge * 10f64.powf(-2.5 + 1.5 * rng.next_f64());
+                let mut cache = MeshCache::default();
+                let start = s.start_point(p, &mut cache).unwrap();
+                if cache.hint.map(|(_, c)| c) != Some(i as u32) {
+                    continue;
+                }
+                let Ok(bound) = s.certified_bound(p, d, length, 1.0, &mut cache) else { continue };
+                if cache.certified || cache.candidates.len() != 2 {
+                    continue;
+                }
+                merged += 1;
+                bound.validate(length, start.f, "the mesh").unwrap();
+                assert_bound_holds(&s, &format!("{name} (shaded {shaded})"), p, d, &bound, |q| {
+                    let on_segment = s.point_on_segment(q, &cache).unwrap();
+                    let query = s.point(q).unwrap();
+                    assert!((on_segment.f - query.f).abs() <= 1e-12 * (1.0 + query.f.abs()), "{name}: the segment's pair missed the closest triangle at {q}");
+                });
+            }
+            println!("{name} (shaded {shaded}): {merged} bounds through edge zones");
+            // Not vacuous.
+            assert!(merged > 300, "{name} (shaded {shaded}): only {merged} bounds through edge zones");
         }
     }
 }

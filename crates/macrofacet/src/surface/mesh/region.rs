@@ -195,7 +195,13 @@ impl FaceRegion {
 
     /// `e_i(p)` for the three edges.
     fn edge_distances(&self, p: DVec3) -> [f64; 3] {
-        [0, 1, 2].map(|k| self.inward[k].dot(p) + self.offset[k])
+        [0, 1, 2].map(|k| self.edge_distance(k, p))
+    }
+
+    /// `e_k(p)`, the distance from `p`'s projection on the plane to the line of edge `k`
+    /// (positive inside): `|e_k(p)|` is at most `p`'s distance to that line.
+    pub fn edge_distance(&self, k: usize, p: DVec3) -> f64 {
+        self.inward[k].dot(p) + self.offset[k]
     }
 
     /// Whether the point with edge distances `e` at height `t` is certified (its heights grow

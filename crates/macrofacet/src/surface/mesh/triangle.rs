@@ -80,7 +80,8 @@ pub(super) fn closer(a: &Closest, b: &Closest) -> bool {
 pub(super) fn closest_among(triangles: &[Triangle], p: DVec3, candidates: &[u32], mut best: Closest) -> Closest {
     for &i in candidates {
         let t = &triangles[i as usize];
-        if !may_be_within(t, p, best.distance_sq) {
+        // (Nothing found yet, nothing is skipped: the test would pass.)
+        if best.distance_sq != f64::INFINITY && !may_be_within(t, p, best.distance_sq) {
             continue;
         }
         let c = closest_on_triangle(t, p, i);

@@ -7,7 +7,8 @@
 //! Segment bounds are rigorous for any closed, consistently oriented mesh. Where the segment
 //! stays in one triangle's face region ([`region`]), `f` is that triangle's plane distance; in an
 //! edge's zone ([`edge`]) the edge's two triangles are the *candidates*, the only triangles that
-//! can be closest there; deep inside, those of the grid's cells along the segment (the
+//! can be closest there (a face region's piece that ends beside an edge goes on through its zone
+//! in the same bound, [`TriangleMesh::through_zone`]); deep inside, those of the grid's cells along the segment (the
 //! triangles within `|f(p)| + 2L` of its start `p`) where they are few; elsewhere the bound is
 //! the Lipschitz one of [`TriangleMesh::far_bound`]. Over candidates, every triangle's distance
 //! `d_T` is convex along a line (the distance to a convex set), so it lies above its tangent at

@@ -14,6 +14,8 @@
 //! - No panic crosses the boundary: every export runs inside `catch_unwind`.
 
 #![allow(non_camel_case_types)]
+// `!(x > 0.0)` is used on purpose, as in the core: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod field;
 mod gpis;

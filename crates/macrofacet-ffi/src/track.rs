@@ -283,7 +283,9 @@ pub unsafe extern "C" fn mf_track_transmittance(
 }
 
 /// Runs `one` over a batch: validates every query first, then tracks them; on any error nothing
-/// is written and the message names the failing index.
+/// is written and the message names the failing index. (The two batch calls' C arguments, and
+/// what differs between them.)
+#[allow(clippy::too_many_arguments)]
 fn track_batch<R: Copy>(
     medium: *const mf_medium,
     surface: *const mf_surface,

@@ -114,6 +114,9 @@
 //!   below the tracker's just past it (z ≈ −45), going down it rises up to 0.045 above (z ≈ +11)
 //!   — cliffs that the local-stationary medium `ρ(f; σ(x))` does not represent.
 
+// `!(x > 0.0)` is used on purpose, as in the core: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 mod experiments;
 mod kernel;
 pub mod linalg;
@@ -198,6 +201,8 @@ pub struct Crossing {
 }
 
 /// The result of [`GpisTracer::trace`].
+// (A crossing is larger than the other outcomes; boxing it would allocate per ray.)
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Trace {
     /// The first entering crossing.

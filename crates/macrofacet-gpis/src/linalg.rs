@@ -78,10 +78,8 @@ impl Cholesky {
         let n = self.n;
         let mut x = b.to_vec();
         for i in 0..n {
-            let mut s = x[i];
-            for k in 0..i {
-                s -= self.l[i * n + k] * x[k];
-            }
+            // (In order: the same rounding as subtracting term by term.)
+            let s = self.l[i * n..i * n + i].iter().zip(&x[..i]).fold(x[i], |s, (l, xk)| s - l * xk);
             x[i] = s / self.l[i * n + i];
         }
         x

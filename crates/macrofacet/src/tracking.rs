@@ -66,6 +66,8 @@ impl TrackStats {
 }
 
 /// The outcome of a tracked free flight.
+// (A collision is larger than a pass; boxing it would allocate per collision.)
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TrackedFlight {
     /// A real collision at distance `t`, where the surface is `point` (its frame is the local

@@ -142,8 +142,9 @@ impl EdgeZone {
             return None;
         }
         let mut best: Option<f64> = None;
-        // (The wider margin first: its shorter middle part has the wider capsule, which more
-        // often holds the whole segment.)
+        // (The wider margin first: its shorter middle part stays farther from the corners'
+        // triangles, so its capsule is as wide or wider and more often holds the whole segment;
+        // the thin torus anchor ran 0.2 % fewer instructions.)
         for level in (0..LEVELS).rev() {
             let r = self.radius[level];
             let (s0, s1) = middle(t, k, level);

@@ -8,8 +8,9 @@
 //! stays in one triangle's face region ([`region`]), `f` is that triangle's plane distance; in an
 //! edge's zone ([`edge`]) the edge's two triangles are the *candidates*, the only triangles that
 //! can be closest there (a face region's piece that ends beside an edge goes on through its zone
-//! in the same bound, [`TriangleMesh::through_zone`]); deep inside, those of the grid's cells along the segment (the
-//! triangles within `|f(p)| + 2L` of its start `p`) where they are few; elsewhere the bound is
+//! in the same bound, [`TriangleMesh::through_zone`]); deep inside, those of the grid's cells
+//! along the segment (the triangles within `|f(p)| + 2L` of its start `p`) where they are few;
+//! elsewhere the bound is
 //! the Lipschitz one of [`TriangleMesh::far_bound`]. Over candidates, every triangle's distance
 //! `d_T` is convex along a line (the distance to a convex set), so it lies above its tangent at
 //! the segment start and below its chord, and `|f| = min_T d_T`. While the lower bound
@@ -507,12 +508,13 @@ impl TriangleMesh {
     /// plane and the frame normal is `T`'s interpolated vertex normal (affine along the piece)
     /// or its face normal, of the triangle closest at `p` (the one recorded there, else a query);
     /// a piece cut short where the ray leaves the region beside an edge goes on through that
-    /// edge's zone in the same bound ([`Self::through_zone`]). Otherwise `Err` with the length the general bound should cover: where `p` is about to
-    /// cross the strip beside an edge that no triangle certifies (a ray passing from one
-    /// triangle's region into its neighbour's), only that strip, whose few candidates make the
-    /// general bound cheap; else the whole `length`. Or, where that begins in an edge's zone
-    /// ([`edge`]), its piece in the zone with the edge's two triangles, the only candidates
-    /// there.
+    /// edge's zone in the same bound ([`Self::through_zone`]). Otherwise `Err` with the length
+    /// the general bound should cover: where `p` is about to cross the strip beside an edge that
+    /// no triangle certifies (a ray passing from one triangle's region into its neighbour's),
+    /// only that strip, whose few candidates make the general bound cheap; else the whole
+    /// `length`. Or, where that begins in an edge's zone ([`edge`]), its piece in the zone with
+    /// the edge's two triangles, the only candidates there. `tolerance` is the tracker's
+    /// ([`MeanSurface::bound`]).
     fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> std::result::Result<SegmentBound, (f64, Option<ZonePair>)> {
         // A triangle recorded at `p` is the closest there (every query and bound records the
         // closest): asking again would find it, or one as close, again.
@@ -610,12 +612,13 @@ impl TriangleMesh {
     /// plane's exact line. One line below both (above both) bounds `f` on the whole segment
     /// where it lies below (above) each at the ends of each part, the lines being straight on
     /// each: the line from the piece's start to the zone part's end, moved down (up) by what
-    /// it lacks where the parts meet. (At a convex edge the certified plane's line is the
-    /// dihedral's tangent there, and nothing moves.) Saves the tracker a segment and the zone's
-    /// search for where it starts: a thin shell's crossing of an edge cost three segments (the
-    /// piece, the zone, the next triangle's piece). Returns the bound, the zone's two triangles
-    /// and the closest point at the end; `None` where no zone holds the piece's end or the
-    /// dihedral bound does not apply there.
+    /// it lacks where the parts meet. (At a convex edge the plane's line is the dihedral's lower
+    /// tangent there, at a concave one its upper: that line does not move.) Saves the tracker a
+    /// segment and the zone's search for where it starts: a thin shell's crossing of an edge
+    /// cost three segments (the piece, the zone, the next triangle's piece). `piece_end` is the
+    /// closest point at the piece's end. Returns the bound, the zone's two triangles and the
+    /// closest point at the end; `None` where no zone holds the piece's end or the dihedral
+    /// bound does not apply there.
     fn through_zone(&self, i: u32, p: DVec3, d: DVec3, length: f64, piece: &SegmentBound, piece_end: &Closest) -> Option<(SegmentBound, [u32; 2], Closest)> {
         let s1 = piece.length;
         let q1 = p + s1 * d;

@@ -26,7 +26,7 @@ import os
 import sys
 
 from mpmath import mp, mpf
-from polynomial_pieces import estrin, interpolant, rust_array
+from polynomial_pieces import estrin, interpolant, largest_error, rust_array
 
 mp.dps = 40
 
@@ -71,13 +71,11 @@ def main():
         coefficients = piece(i)
         if i == PIECES - 1:
             coefficients = exact_at_zero(coefficients)
-        for k in range(CHECK + 1):
-            z = -1 + 2 * mpf(k) / CHECK
+        def want(z, i=i):
             y = (mpf(i) + (z + 1) / 2) / PIECES
-            if y < y_min:
-                continue
-            want = erfcx_of_y(y)
-            worst = max(worst, float(abs((estrin(coefficients, float(z)) - want) / want)))
+            return None if y < y_min else erfcx_of_y(y)
+
+        worst = max(worst, largest_error(coefficients, want, CHECK))
         table.append(coefficients)
     print(f"{len(table)} pieces of degree {DEGREE}: largest relative error {worst:.3g}")
     if worst > LIMIT:

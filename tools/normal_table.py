@@ -25,7 +25,7 @@ import os
 import sys
 
 from mpmath import mp, mpf
-from polynomial_pieces import estrin, interpolant, rust_array
+from polynomial_pieces import interpolant, largest_error, rust_array
 
 mp.dps = 40
 
@@ -51,10 +51,7 @@ def table(fn):
     pieces, worst = [], 0.0
     for i in range((X_HI - X_LO) * PER_UNIT):
         coefficients = piece(fn, i)
-        for k in range(CHECK + 1):
-            z = -1 + 2 * mpf(k) / CHECK
-            want = fn(mpf(X_LO) + (mpf(i) + (z + 1) / 2) / PER_UNIT)
-            worst = max(worst, float(abs((estrin(coefficients, float(z)) - want) / want)))
+        worst = max(worst, largest_error(coefficients, lambda z: fn(mpf(X_LO) + (mpf(i) + (z + 1) / 2) / PER_UNIT), CHECK))
         pieces.append(coefficients)
     return pieces, worst
 

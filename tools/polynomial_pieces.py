@@ -26,6 +26,18 @@ def estrin(c, z):
     return (p03 + p47 * z4) + p8a * z8
 
 
+def largest_error(coefficients, want, check):
+    """The largest relative error of the f64 evaluation of a piece (`estrin`) at `check + 1`
+    equally spaced `z` in `[-1, 1]` against `want(z)` (mpmath), where that is not None."""
+    worst = 0.0
+    for k in range(check + 1):
+        z = -1 + 2 * mpf(k) / check
+        value = want(z)
+        if value is not None:
+            worst = max(worst, float(abs((estrin(coefficients, float(z)) - value) / value)))
+    return worst
+
+
 def rust_array(name, pieces):
     """The lines of `pub(super) const NAME: [[f64; n]; m]` holding `pieces` (shortest round-trip
     literals: the f64 values exactly)."""

@@ -604,9 +604,10 @@ mod tests {
     /// the pieces' ends among them.
     #[test]
     fn table_pieces_agree_with_the_closed_forms() {
+        use normal_table::{LN_CDF, PER_UNIT, X_HI, X_LO};
         let mut worst = [0.0f64; 2];
-        let ends = (0..=44).map(|i| -8.0 + i as f64 * 0.25).flat_map(|x: f64| [x, f64::from_bits(x.to_bits() - 1), f64::from_bits(x.to_bits() + 1)]);
-        for x in (0..200_000).map(|i| -8.0 + 11.0 * (i as f64 + 0.5) / 200_000.0).chain(ends).filter(|x| (-8.0..3.0).contains(x)) {
+        let ends = (0..=LN_CDF.len()).map(|i| X_LO + i as f64 / PER_UNIT).flat_map(|x: f64| [x, f64::from_bits(x.to_bits() - 1), f64::from_bits(x.to_bits() + 1)]);
+        for x in (0..200_000).map(|i| X_LO + (X_HI - X_LO) * (i as f64 + 0.5) / 200_000.0).chain(ends).filter(|x| (X_LO..X_HI).contains(x)) {
             let pairs = [(ln_normal_cdf(x), ln_normal_cdf_closed_form(x)), (normal_pdf_over_cdf(x), normal_pdf_over_cdf_closed_form(x))];
             for (k, (table, closed)) in pairs.into_iter().enumerate() {
                 worst[k] = worst[k].max(((table - closed) / closed).abs());

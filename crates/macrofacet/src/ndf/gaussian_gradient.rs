@@ -55,8 +55,13 @@ pub(crate) fn expected_positive_part(w_z: f64, s: f64) -> f64 {
         // shell's σ_t evaluations look along the flakes' normals, where `a` is large).
         return s * a;
     }
-    let tail = 0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a.abs() * erfcx(a.abs()));
-    s * (a.max(0.0) + tail)
+    s * (a.max(0.0) + tail(a))
+}
+
+/// [`expected_positive_part`]'s `e^{−a²} (1/√π − |a| erfcx(|a|)) / 2`, over `s`.
+#[inline]
+fn tail(a: f64) -> f64 {
+    0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a.abs() * erfcx(a.abs()))
 }
 
 /// Where [`expected_positive_part`]'s tail no longer changes `a` (checked by a unit test).
@@ -276,9 +281,9 @@ fn catmull_rom_weights(t: f64) -> [f64; 4] {
 
 #[cfg(test)]
 mod tests {
-    use super::{expected_positive_part, sample_shifted_linear_gaussian, tabulated_quantile, FRAC_1_SQRT_PI, NO_TAIL};
+    use super::{expected_positive_part, sample_shifted_linear_gaussian, tabulated_quantile, tail, NO_TAIL};
     use crate::rng::Pcg32;
-    use crate::special::{erfcx, normal_cdf, normal_pdf};
+    use crate::special::{normal_cdf, normal_pdf};
 
     /// Inside the table's domain its starting point lies within the `1e-5 (1 + |x|)` of the
     /// quantile below which one Halley step is final, and the sampler's result (from it, or
@@ -318,7 +323,7 @@ mod tests {
     fn the_tail_is_below_an_ulp_beyond_no_tail() {
         let mut a = NO_TAIL;
         while a < 1e3 {
-            let tail = 0.5 * (-a * a).exp() * (FRAC_1_SQRT_PI - a * erfcx(a));
+            let tail = tail(a);
             assert_eq!(a + tail, a, "a = {a}: tail {tail:e}");
             a = a * 1.001 + 1e-3;
         }

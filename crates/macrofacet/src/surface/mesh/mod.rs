@@ -624,7 +624,7 @@ impl TriangleMesh {
         let q1 = p + s1 * d;
         // The piece ended where the ray left the region across its nearest edge (or at its
         // height, where the nearest edge's zone may still hold it).
-        let e = [0, 1, 2].map(|k| self.regions[i as usize].edge_distance(k, q1));
+        let e = self.regions[i as usize].edge_distances(q1);
         let nearest = if e[0] <= e[1] && e[0] <= e[2] { 0 } else if e[1] <= e[2] { 1 } else { 2 };
         let (zone_length, zone) = self.edge_zone_piece(i, nearest, q1, d, length - s1)?;
         let pair = [i, zone.neighbour];

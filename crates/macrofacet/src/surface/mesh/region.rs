@@ -194,7 +194,7 @@ impl FaceRegion {
     }
 
     /// `e_i(p)` for the three edges.
-    fn edge_distances(&self, p: DVec3) -> [f64; 3] {
+    pub fn edge_distances(&self, p: DVec3) -> [f64; 3] {
         [0, 1, 2].map(|k| self.edge_distance(k, p))
     }
 

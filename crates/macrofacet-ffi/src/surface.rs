@@ -16,7 +16,7 @@
 use super::medium::mf_vec3;
 use super::{arg, boundary, free_handle, into_handle, mf_status, out, FfiError, FfiResult};
 use macrofacet::error::{Error, ErrorKind, Result};
-use macrofacet::surface::{convex_bound, enclosure, Aabb, Curvature, Enclosure, GridSurface, MeanSurface, SegmentBound, Sphere, SurfacePoint, TriangleMesh};
+use macrofacet::surface::{convex_bound, enclosure, Aabb, Curvature, Enclosure, GridSurface, MeanSurface, SegmentBound, SegmentEnd, Sphere, SurfacePoint, TriangleMesh};
 use glam::{DMat3, DVec2, DVec3};
 use std::ffi::c_void;
 
@@ -202,7 +202,7 @@ impl MeanSurface for CallbackSurface {
             if code != 0 {
                 return Err(callback_failed("bound", code));
             }
-            return Ok(SegmentBound { length: out.length, f_lo: out.f_lo, f_hi: out.f_hi, cos: [out.cos_lo, out.cos_hi], end: None });
+            return Ok(SegmentBound { length: out.length, f_lo: out.f_lo, f_hi: out.f_hi, cos: [out.cos_lo, out.cos_hi], end: SegmentEnd::Unknown });
         }
         match self.callbacks.curvature {
             Some(curvature) => {

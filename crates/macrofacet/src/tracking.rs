@@ -34,7 +34,7 @@ use crate::ndf::{MicrofacetDistribution, Ndf, Side};
 use crate::opaque_core::{descent_transmittance_bound, opaque_core, OpaqueCore};
 use crate::ordered::{largest_magnitude, less, more};
 use crate::rng::Pcg32;
-use crate::surface::{MeanSurface, SegmentBound, SurfacePoint};
+use crate::surface::{MeanSurface, SegmentBound, SegmentEnd, SurfacePoint};
 use glam::DVec3;
 
 /// The PCG32 stream ("mftrack") of the C ABI's tracking calls: `mf_track_*` with `seed` equals
@@ -732,8 +732,12 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             bound.validate(length, start.f, "the mean surface")?;
             // The end point is used before the segment ends (found by fuzzing: a convex callback
             // surface's end with an infinite tangent went on for 6 callback calls).
-            if let Some(end) = bound.end {
-                end.validated(p + bound.length * d)?;
+            match bound.end {
+                SegmentEnd::Point(end) => {
+                    end.validated(p + bound.length * d)?;
+                }
+                SegmentEnd::Height(f) if f.is_nan() => return Err(nan_end_height(p + bound.length * d)),
+                _ => {}
             }
             // A side without a bound gets the surface's Lipschitz bound (validated: only f_lo
             // may be −∞ and only f_hi +∞).
@@ -756,7 +760,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             }
             // How far below f the lower bound falls at the ends (what costs tentative collisions),
             // against the end point's f when the surface gave it, else the upper bound.
-            let f_end = bound.end.map_or(bound.f_hi[1], |e| e.f);
+            let f_end = bound.end.f().unwrap_or(bound.f_hi[1]);
             // (f64::max: an infinite f at the start, far outside a mesh, makes a difference NaN.)
             let looseness = (start.f - bound.f_lo[0]).max(f_end - bound.f_lo[1]);
             // A halving in vain is undone, asking for the longer segment again (a surface's cache
@@ -851,7 +855,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// longer than `|f|` at its start). Delta and ratio tracking stay unbiased: each segment's
     /// majorant and control depend only on the ray before it.
     fn restarts_at_tentative(seg: &Segment) -> bool {
-        seg.bound.end.is_none()
+        seg.bound.end == SegmentEnd::Unknown
     }
 
     /// What the next segment needs to know of `seg`: empty (no tentative collision, nothing
@@ -898,10 +902,9 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         seg.shape.invert_density_integral(f0 + slope * s, slope, seg.bound.length - s, target).map(|ds| s + ds)
     }
 
-    /// The start of the segment after `seg` (distance, position and surface point): where its
-    /// bound ended, with the bound's end point or a fresh query.
+    /// Where the segment after `seg` starts (distance and position): where its bound ended.
     #[inline(always)]
-    fn advance(&self, seg: &Segment, origin: DVec3, d: DVec3, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<(f64, DVec3, SurfacePoint)> {
+    fn advance(&self, seg: &Segment, origin: DVec3, d: DVec3) -> Result<(f64, DVec3)> {
         let t = seg.t + seg.bound.length;
         // A segment below the rounding of t cannot move the ray: the next would be the same
         // (found by fuzzing: σ = 1e-50 with GGX α = 7e5 shortened every segment to 3e-87 at
@@ -916,16 +919,33 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             ));
         }
         // The point the surface computed the end at (`next_segment`).
-        let p = ray_point(seg.p, seg.bound.length, d)?;
-        let start = match seg.bound.end {
-            // Validated with its bound (`next_segment`); counted as the query it saves.
-            Some(end) => {
-                stats.surface_queries += 1;
-                end
-            }
-            None => self.checked(self.surface.start_point(p, cache), p, stats)?,
-        };
-        Ok((t, p, start))
+        Ok((t, ray_point(seg.p, seg.bound.length, d)?))
+    }
+
+    /// Where a segment that passed ends the call, at `t` its end, before the surface point there
+    /// is computed: where the segment's end is known (counted as the query it saves), past the
+    /// clipped interval, or above the exit level (`EXITS`); the checks the loop's top would make
+    /// first. A thin shell's calls mostly end so, within their first segment.
+    #[inline(always)]
+    fn ends_after<const EXITS: bool>(seg: &Segment, t: f64, t_max: f64, t_exit: f64, exit_level: f64, stats: &mut TrackStats) -> Option<f64> {
+        let f = seg.bound.end.f()?;
+        stats.surface_queries += 1;
+        if !(t < t_exit) {
+            return Some(ended::<EXITS>(t_max, t_exit));
+        }
+        (EXITS && f > exit_level).then_some(t)
+    }
+
+    /// The surface at `p`, the end of `seg`, where the next segment starts: the bound's end point,
+    /// the surface's from what the bound left in the cache, or a fresh query.
+    #[inline(always)]
+    fn start_after(&self, seg: &Segment, p: DVec3, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<SurfacePoint> {
+        match seg.bound.end {
+            // Validated with its bound (`next_segment`), counted in `ends_after`.
+            SegmentEnd::Point(end) => Ok(end),
+            SegmentEnd::Height(_) => self.surface.end_point(p, cache)?.validated(p),
+            SegmentEnd::Unknown => self.checked(self.surface.start_point(p, cache), p, stats),
+        }
     }
 
     /// Samples a free flight along `origin + t d`, `t ∈ [0, t_max]` (`t_max` may be `+∞`), by
@@ -1028,7 +1048,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 None => {
                     segments += 1;
                     previous = self.previous(&seg, tentative);
-                    self.advance(&seg, origin, d, &mut cache, stats)?
+                    let (t, p) = self.advance(&seg, origin, d)?;
+                    if let Some(t_end) = Self::ends_after::<EXITS>(&seg, t, t_max, t_exit, exit_level, stats) {
+                        return Ok((TrackedFlight::Pass, t_end));
+                    }
+                    (t, p, self.start_after(&seg, p, &mut cache, stats)?)
                 }
             };
         }
@@ -1131,7 +1155,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     }
                     segments += 1;
                     previous = self.previous(&seg, tentative);
-                    self.advance(&seg, origin, d, &mut cache, stats)?
+                    let (t, p) = self.advance(&seg, origin, d)?;
+                    if let Some(t_end) = Self::ends_after::<EXITS>(&seg, t, t_max, t_exit, exit_level, stats) {
+                        return Ok((transmittance, t_end));
+                    }
+                    (t, p, self.start_after(&seg, p, &mut cache, stats)?)
                 }
             };
         }
@@ -1166,6 +1194,12 @@ fn ray_point(p: DVec3, s: f64, d: DVec3) -> Result<DVec3> {
 #[inline(never)]
 fn beyond_f64(p: DVec3, s: f64, d: DVec3) -> Error {
     Error::new(ErrorKind::InvalidArgument, format!("the ray from {p} along {d} leaves the range of f64 at {s:e} from there: no point beyond can be represented"))
+}
+
+#[cold]
+#[inline(never)]
+fn nan_end_height(end: DVec3) -> Error {
+    Error::new(ErrorKind::InvalidArgument, format!("the mean surface's segment bound gave f = NaN at its end {end}"))
 }
 
 /// The probability with which a caller keeps a shadow ray whose transmittance is at most

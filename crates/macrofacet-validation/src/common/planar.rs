@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use macrofacet::field::{LocalParams, MediumField, ParamBounds};
-use macrofacet::surface::{Aabb, MeanSurface, SegmentBound, SurfacePoint};
+use macrofacet::surface::{Aabb, MeanSurface, SegmentBound, SegmentEnd, SurfacePoint};
 use macrofacet::Result;
 
 /// The plane `z = 0` (interior below) with the frame `(x, y, z)`: the gpis kernel's axes.
@@ -18,7 +18,7 @@ impl MeanSurface for PlaneSurface {
     /// Exact: `f` is linear along any segment and `d · n = d_z`.
     fn bound(&self, start: &SurfacePoint, _p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {
         let f = [start.f, start.f + length * d.z];
-        Ok(SegmentBound { length, f_lo: f, f_hi: f, cos: [d.z, d.z], end: None })
+        Ok(SegmentBound { length, f_lo: f, f_hi: f, cos: [d.z, d.z], end: SegmentEnd::Unknown })
     }
     fn bounding_box(&self) -> Aabb {
         Aabb { min: DVec3::NEG_INFINITY, max: DVec3::new(f64::INFINITY, f64::INFINITY, 0.0) }

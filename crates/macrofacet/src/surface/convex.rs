@@ -6,7 +6,7 @@
 //! distances (outside: the distance to a convex set; inside: a maximum of plane distances); with
 //! flipped normals they are concave.
 
-use super::{SegmentBound, SurfacePoint};
+use super::{SegmentBound, SegmentEnd, SurfacePoint};
 use glam::DVec3;
 
 /// The sign of the second derivative of `f` along every line.
@@ -32,5 +32,5 @@ pub fn convex_bound(start: &SurfacePoint, end: &SurfacePoint, d: DVec3, length: 
     // host's normal (within 1e-4 of unit length) a hair outside [-1, 1]: clamped, then ordered.
     let cos = cos.map(|c| c.clamp(-1.0, 1.0));
     let cos = [cos[0].min(cos[1]), cos[0].max(cos[1])];
-    SegmentBound { length, f_lo, f_hi, cos, end: Some(*end) }
+    SegmentBound { length, f_lo, f_hi, cos, end: SegmentEnd::Point(*end) }
 }

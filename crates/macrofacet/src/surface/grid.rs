@@ -11,7 +11,7 @@
 //! the derivative of the interpolant along an axis is a bilinear blend of the cell's four edge
 //! differences along that axis, so it is bounded by the largest of them.
 
-use super::{Aabb, MeanSurface, SegmentBound, SurfacePoint};
+use super::{Aabb, MeanSurface, SegmentBound, SegmentEnd, SurfacePoint};
 use crate::error::{Error, ErrorKind, Result};
 use glam::{DMat3, DVec2, DVec3, IVec3};
 
@@ -258,7 +258,7 @@ impl MeanSurface for GridSurface {
 
     fn bound(&self, start: &SurfacePoint, p: DVec3, d: DVec3, length: f64, _tolerance: f64, _: &mut ()) -> Result<SegmentBound> {
         let lipschitz = self.lipschitz_along(p, d, length);
-        Ok(SegmentBound { length, f_lo: [start.f, start.f - lipschitz * length], f_hi: [start.f, start.f + lipschitz * length], cos: [-1.0, 1.0], end: None })
+        Ok(SegmentBound { length, f_lo: [start.f, start.f - lipschitz * length], f_hi: [start.f, start.f + lipschitz * length], cos: [-1.0, 1.0], end: SegmentEnd::Unknown })
     }
 
     /// Steps by the gradient bound of the cells near the ray, not the grid's largest (one wild

@@ -96,9 +96,34 @@ pub struct SegmentBound {
     pub f_hi: [f64; 2],
     /// Range of `d · n` along the segment, within `[-1, 1]`.
     pub cos: [f64; 2],
-    /// The surface point at `s = length`, when computing the bound produced it exactly (saves the
-    /// tracker a query at the start of the next segment).
-    pub end: Option<SurfacePoint>,
+    /// What the bound knows of the surface at `s = length` (a known end saves the tracker a query
+    /// at the start of the next segment).
+    pub end: SegmentEnd,
+}
+
+/// The surface at a segment's end, as far as its bound computed it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SegmentEnd {
+    /// Not computed: the tracker queries the surface there.
+    Unknown,
+    /// The surface point there, exactly.
+    Point(SurfacePoint),
+    /// `f` there, exactly as [`MeanSurface::point`] gives it; the rest of the point is left to
+    /// [`MeanSurface::end_point`], which the tracker calls only when a segment starts there. Most
+    /// tracking calls through a thin shell end within their first segment (a collision, or the
+    /// exit, known from `f`), where the frame at its end went unused.
+    Height(f64),
+}
+
+impl SegmentEnd {
+    /// `f` at the end, where known.
+    pub fn f(&self) -> Option<f64> {
+        match self {
+            SegmentEnd::Unknown => None,
+            SegmentEnd::Point(point) => Some(point.f),
+            SegmentEnd::Height(f) => Some(*f),
+        }
+    }
 }
 
 impl SegmentBound {
@@ -110,7 +135,7 @@ impl SegmentBound {
             f_lo: [f0, f0 - constant * length],
             f_hi: [f0, f0 + constant * length],
             cos: [-1.0, 1.0],
-            end: None,
+            end: SegmentEnd::Unknown,
         }
     }
 
@@ -238,6 +263,14 @@ pub trait MeanSurface {
     /// certified projection).
     fn point_on_segment(&self, p: DVec3, _cache: &Self::Cache) -> Result<SurfacePoint> {
         self.point(p)
+    }
+
+    /// The surface at the end `p` of the last [`Self::bound`] call with this `cache`, where that
+    /// bound's end was [`SegmentEnd::Height`] and a segment starts there: as
+    /// [`Self::start_point`] (which answers it for any surface), from what the bound left in the
+    /// cache.
+    fn end_point(&self, p: DVec3, cache: &mut Self::Cache) -> Result<SurfacePoint> {
+        self.start_point(p, cache)
     }
 
     /// The texture coordinates at `p`, where a query answered `point`. A surface whose `uv`

@@ -28,7 +28,7 @@ mod offset;
 mod region;
 mod triangle;
 
-use super::{convex_bound, Aabb, Curvature, MeanSurface, SegmentBound, SurfacePoint};
+use super::{convex_bound, Aabb, Curvature, MeanSurface, SegmentBound, SegmentEnd, SurfacePoint};
 use crate::error::{Error, ErrorKind, Result};
 use crate::ordered::{less, more};
 use bvh::Bvh;
@@ -386,21 +386,34 @@ impl TriangleMesh {
         cache.hint.filter(|(q, _)| *q == p).map(|(_, i)| i)
     }
 
-    /// The surface point of a closest-point result.
-    fn surface_point(&self, p: DVec3, c: &Closest) -> SurfacePoint {
+    /// The sign of `f` at `p`, whose closest point is `c`, by the pseudo-normal of `c`'s feature
+    /// (returned too).
+    #[inline]
+    fn side(&self, p: DVec3, c: &Closest) -> (f64, DVec3) {
         let tri = &self.attributes[c.triangle as usize];
         let pseudo = match c.feature {
             Feature::Face => self.triangles[c.triangle as usize].n,
             Feature::Edge(i) => tri.edge_pn[i],
             Feature::Vertex(i) => tri.vertex_pn[i],
         };
-        let offset = p - c.point;
-        let distance = c.distance_sq.sqrt();
         // Outside the bounding box is outside the (closed) mesh. Far away the pseudo-normal test
         // is no help: every feature is at the same rounded distance (found by fuzzing: a point
         // 1.5e47 from a tetrahedron 2000 wide got f < 0).
         let outside_box = p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any();
-        let sign = if outside_box || offset.dot(pseudo) >= 0.0 { 1.0 } else { -1.0 };
+        (if outside_box || (p - c.point).dot(pseudo) >= 0.0 { 1.0 } else { -1.0 }, pseudo)
+    }
+
+    /// `f` at `p`, whose closest point is `c`: [`Self::surface_point`]'s, without the frame.
+    fn signed_distance(&self, p: DVec3, c: &Closest) -> f64 {
+        self.side(p, c).0 * c.distance_sq.sqrt()
+    }
+
+    /// The surface point of a closest-point result.
+    fn surface_point(&self, p: DVec3, c: &Closest) -> SurfacePoint {
+        let tri = &self.attributes[c.triangle as usize];
+        let (sign, pseudo) = self.side(p, c);
+        let offset = p - c.point;
+        let distance = c.distance_sq.sqrt();
         let normal = match (tri.shading, c.feature) {
             (Some(ns), _) => (c.barycentric.x * ns[0] + c.barycentric.y * ns[1] + c.barycentric.z * ns[2]).try_normalize().unwrap_or(pseudo),
             // ∇(±|p − c|) over a face is its normal on both sides, exactly.
@@ -561,7 +574,8 @@ impl TriangleMesh {
             f_lo: [plane[0] - pad, plane[1] - pad],
             f_hi: [plane[0] + pad, plane[1] + pad],
             cos: [more(cos[0] - 1e-12, -1.0), less(cos[1] + 1e-12, 1.0)],
-            end: Some(self.surface_point(end_p, &end)),
+            // The frame there only if a segment starts there (MeanSurface::end_point).
+            end: SegmentEnd::Height(self.signed_distance(end_p, &end)),
         };
         cache.candidates.clear();
         // (Not for a piece that rises beyond RISING_THROUGH_ZONE of the tolerance: the ray is
@@ -635,7 +649,7 @@ impl TriangleMesh {
         let end = self.surface_point(end_p, &end_closest);
         // (At `q1` the piece's triangle is closest, at its projection.)
         let at_start = [*piece_end, closest_on_triangle(&self.triangles[pair[1] as usize], q1, pair[1])];
-        let zone_bound = self.dihedral_bound(piece.end.as_ref()?, &at_start, &end, &end_closest, q1, d, zone_length, pair, zone.curvature?)?;
+        let zone_bound = self.dihedral_bound(&self.surface_point(q1, piece_end), &at_start, &end, &end_closest, q1, d, zone_length, pair, zone.curvature?)?;
         // The lines at the parts' meeting point `s1`, and the straight line from the start to
         // the end: how far it lies above the lower bounds there (below the upper).
         let at_s1 = |ends: [f64; 2]| ends[0] + (ends[1] - ends[0]) * (s1 / s2);
@@ -648,7 +662,7 @@ impl TriangleMesh {
             f_lo: f_lo.map(|f| f - lower_by),
             f_hi: f_hi.map(|f| f + raise_by),
             cos: [less(piece.cos[0], zone_bound.cos[0]), more(piece.cos[1], zone_bound.cos[1])],
-            end: Some(end),
+            end: SegmentEnd::Point(end),
         };
         Some((merged, pair, end_closest))
     }
@@ -694,7 +708,7 @@ impl TriangleMesh {
             f_lo: bound.f_lo.map(|f| f - pad),
             f_hi: bound.f_hi.map(|f| f + pad),
             cos: [(cos[0] - 1e-12).max(-1.0), (cos[1] + 1e-12).min(1.0)],
-            end: Some(*end),
+            end: SegmentEnd::Point(*end),
         })
     }
 }
@@ -710,6 +724,15 @@ impl MeanSurface for TriangleMesh {
         let closest = self.closest(p, Self::hint(cache));
         cache.hint = Some((p, closest.triangle));
         Ok(self.surface_point(p, &closest))
+    }
+
+    fn end_point(&self, p: DVec3, cache: &mut MeshCache) -> Result<SurfacePoint> {
+        // The end of a certified piece (`certified_bound`, which recorded its triangle there):
+        // its projection, as the bound's end height was computed.
+        match Self::hint_at(cache, p) {
+            Some(i) if cache.certified => Ok(self.surface_point(p, &self.regions[i as usize].face_closest(self.triangles[i as usize].n, p, i))),
+            _ => self.start_point(p, cache),
+        }
     }
 
     fn point_on_segment(&self, p: DVec3, cache: &MeshCache) -> Result<SurfacePoint> {
@@ -912,7 +935,7 @@ impl MeanSurface for TriangleMesh {
         let end_closest = closest_of(&last);
         cache.hint = Some((p + piece * d, end_closest.triangle));
         let end = self.surface_point(p + piece * d, &end_closest);
-        Ok(SegmentBound { length: piece, f_lo: pad(f_lo, -PAD * eps), f_hi: pad(f_hi, PAD * eps), cos, end: Some(end) })
+        Ok(SegmentBound { length: piece, f_lo: pad(f_lo, -PAD * eps), f_hi: pad(f_hi, PAD * eps), cos, end: SegmentEnd::Point(end) })
     }
 
     /// Exact while the ray stays in the certified region of the triangle closest at `p`: up to

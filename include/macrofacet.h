@@ -571,6 +571,12 @@ typedef struct mf_grid {
  * `T / survival` (the host multiplies by nothing more), and the call's own roulette counts
  * that weight.
  *
+ * `hint` 0 (as zero-initialised): none. Otherwise, for a call that starts where a collision
+ * was (its escape flight, its shadow rays), that collision's [`mf_collision::hint`]: the call's
+ * first surface query begins its search there (on a mesh, at the collision's triangle). Any
+ * value is safe: a stale or foreign hint costs at most the search it fails to save, and the
+ * results are the same up to the rounding of another way to the same closest point.
+ *
  * [`mf_enclosure_exit_level`]: crate::surface::mf_enclosure_exit_level
  */
 typedef struct mf_track_query {
@@ -580,6 +586,7 @@ typedef struct mf_track_query {
   uint64_t seed;
   double exit_level;
   double survival;
+  uint64_t hint;
 } mf_track_query;
 
 /**
@@ -612,6 +619,11 @@ typedef struct mf_collision {
    */
   struct mf_local_params local;
   struct mf_track_stats stats;
+  /**
+   * Where the surface found the collision, for the calls that start there
+   * ([`mf_track_query::hint`]); 0 for none (and when passing).
+   */
+  uint64_t hint;
 } mf_collision;
 
 /**

@@ -22,8 +22,8 @@ thread_local EventRecords event_records;
 
 template <class Unblocked>
 Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium,
-                                         Sampler& sampler, const Scene::ShadowRoulette& kept,
-                                         Unblocked&& unblocked) const {
+                                         const MediumInteraction* from, Sampler& sampler,
+                                         const Scene::ShadowRoulette& kept, Unblocked&& unblocked) const {
     const bool vol = scene_.integrator.volumetric;
     // The roulette's weight, until its medium's estimate takes it (applied once, whatever the
     // ray meets).
@@ -57,7 +57,7 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
             bool exited = false;
             if (to_exit) {
                 float t_end;
-                T *= medium->transmittance_to_exit(r, seg, sampler, &t_end);
+                T *= medium->transmittance_to_exit(r, seg, i == 0 ? from : nullptr, sampler, &t_end);
                 exited = t_end < seg;
                 if (exited) seg = t_end;
             } else if (medium) {
@@ -98,9 +98,9 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 o, const Vec3& d, float dist, cons
     if (scene_.integrator.volumetric && scene_.has_opaque_cores()) {
         const Scene::ShadowRoulette kept = scene_.next_event_roulette(o, d, dist, sampler);
         if (!(kept.survival > 0)) return Rgb(0.0f);
-        return shadow_transmittance(o, d, dist, medium, sampler, kept, [] { return true; });
+        return shadow_transmittance(o, d, dist, medium, nullptr, sampler, kept, [] { return true; });
     }
-    return shadow_transmittance(o, d, dist, medium, sampler, Scene::ShadowRoulette{}, [] { return true; });
+    return shadow_transmittance(o, d, dist, medium, nullptr, sampler, Scene::ShadowRoulette{}, [] { return true; });
 }
 
 Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
@@ -145,7 +145,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
     };
 
     // Next-event estimation: uniform emitter choice, MIS against eval_pdf.
-    auto direct = [&](const Vec3& origin, const Medium* m, const Vec3& ref, auto&& eval) -> Rgb {
+    auto direct = [&](const Vec3& origin, const Medium* m, const MediumInteraction* from, const Vec3& ref, auto&& eval) -> Rgb {
         if (emitters.empty()) return Rgb(0.0f);
         size_t idx = std::min(size_t(sampler.next_1d() * float(emitters.size())), emitters.size() - 1);
         Vec2 u = sampler.next_2d();
@@ -163,7 +163,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         if (!(kept.survival > 0)) return Rgb(0.0f);
         float f_pdf = 0.0f;
         Rgb f(0.0f);
-        Rgb T = shadow_transmittance(origin, es.wi, dist, m, sampler, kept, [&] {
+        Rgb T = shadow_transmittance(origin, es.wi, dist, m, from, sampler, kept, [&] {
             f = eval(es.wi, &f_pdf);
             return !f.is_black();
         });
@@ -208,7 +208,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 // from 12.5 M to 7.2 M instructions). Its collision, or its exit, or the shape
                 // bounds the superposed media's flights.
                 float t_end;
-                const bool collided = medium->sample_free_flight_to_exit(ray, kInf, sampler, mi_m, &t_end);
+                const bool collided = medium->sample_free_flight_to_exit(ray, kInf, from, sampler, mi_m, &t_end);
                 const float reach = std::min(collided ? mi_m->t : t_end, ray.tmax);
                 found = scene_.intersect_near(medium->near_scene(), Ray(ray.o, ray.d, ray.tmin, reach), &hit);
                 if (found) {
@@ -249,7 +249,7 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                 const PhaseFunction& ph = scattering->phase();
                 Vec3 wo = -ray.d;
                 if (!ph.is_delta())
-                    L += throughput() * direct(mi->p, medium, mi->p, [&](const Vec3& wi, float* pdf) {
+                    L += throughput() * direct(mi->p, medium, mi, mi->p, [&](const Vec3& wi, float* pdf) {
                         return ph.eval_pdf(*mi, wo, wi, pdf);
                     });
                 Vec3 wi;

@@ -29,9 +29,10 @@ private:
     /// `unblocked()` called once after the first ray cast unless that cast found an opaque
     /// surface: 0 without tracking any medium when it returns false (a next-event estimate whose
     /// phase value is 0, computed only for rays that are not blocked at once).
+    /// `from`: the medium event the ray leaves (its first segment starts there), or null.
     template <class Unblocked>
-    Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, Sampler& sampler,
-                             const Scene::ShadowRoulette& kept, Unblocked&& unblocked) const;
+    Rgb shadow_transmittance(Vec3 o, const Vec3& d, float dist, const Medium* medium, const MediumInteraction* from,
+                             Sampler& sampler, const Scene::ShadowRoulette& kept, Unblocked&& unblocked) const;
 
     const Scene& scene_;
 };

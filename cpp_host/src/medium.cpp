@@ -79,11 +79,11 @@ bool HomogeneousMedium::sample_free_flight(const Ray& ray, float t_max, const Me
     return false;
 }
 
-bool Medium::sample_free_flight_to_exit(const Ray&, float, Sampler&, MediumInteraction*, float*) const {
+bool Medium::sample_free_flight_to_exit(const Ray&, float, const MediumInteraction*, Sampler&, MediumInteraction*, float*) const {
     throw Error(name() + " medium: does not find its region's exit");
 }
 
-Rgb Medium::transmittance_to_exit(const Ray&, float, Sampler&, float*) const {
+Rgb Medium::transmittance_to_exit(const Ray&, float, const MediumInteraction*, Sampler&, float*) const {
     throw Error(name() + " medium: does not find its region's exit");
 }
 

@@ -41,6 +41,9 @@ struct MediumInteraction {
     /// back to the medium as the `from` of the next free flight (and to its phase function):
     /// the gpis medium keeps the crossing's exact point, normal and sampled gradient here.
     std::array<double, 24> record{};
+    /// A macrofacet medium's mf_collision::hint: where the library found the surface at p, for
+    /// the event's escape flight and shadow rays (mf_track_query::hint; 0: none).
+    uint64_t surface_hint = 0;
 };
 
 class PhaseFunction {
@@ -128,10 +131,13 @@ public:
     unsigned near_scene() const { return near_scene_; }
     /// sample_free_flight for a ray inside the region, up to t_max or the region's exit:
     /// *t_end is where a flight that passed ended (the ray continues from there, outside).
-    virtual bool sample_free_flight_to_exit(const Ray& ray, float t_max, Sampler& sampler, MediumInteraction* mi,
-                                            float* t_end) const;
-    /// transmittance, up to t_max or the region's exit (*t_end).
-    virtual Rgb transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const;
+    /// `from` as sample_free_flight's.
+    virtual bool sample_free_flight_to_exit(const Ray& ray, float t_max, const MediumInteraction* from, Sampler& sampler,
+                                            MediumInteraction* mi, float* t_end) const;
+    /// transmittance, up to t_max or the region's exit (*t_end); `from` is the event the shadow
+    /// ray leaves, or null.
+    virtual Rgb transmittance_to_exit(const Ray& ray, float t_max, const MediumInteraction* from, Sampler& sampler,
+                                      float* t_end) const;
 
 protected:
     bool finds_exits_ = false;

@@ -102,10 +102,10 @@ private:
     std::string label_;
 };
 
-/// `exit_level` 0: up to t_max only; no roulette's survival (mf_track_query).
-mf_track_query query(const Ray& ray, float t_max, double exit_level, Sampler& sampler) {
+/// `exit_level` 0: up to t_max only; no roulette's survival; `hint` 0: none (mf_track_query).
+mf_track_query query(const Ray& ray, float t_max, double exit_level, Sampler& sampler, uint64_t hint = 0) {
     return mf_track_query{to_mf(ray.o), to_mf_unit(ray.d), std::isfinite(t_max) ? double(t_max) : INFINITY, sampler.next_u64(),
-                          exit_level, 0.0};
+                          exit_level, 0.0, hint};
 }
 
 }  // namespace
@@ -174,17 +174,17 @@ void MacrofacetMedium::find_exits(double exit_level, const Medium* exterior, uns
     finds_exits_ = true;
 }
 
-bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const MediumInteraction*, int, Sampler& sampler,
+bool MacrofacetMedium::sample_free_flight(const Ray& ray, float t_max, const MediumInteraction* from, int, Sampler& sampler,
                                           MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const {
     *weight = Rgb(1.0f);  // grey medium: the albedo lives in the phase function
     *pdf_ratio = Rgb(1.0f);
     float t_end;
-    return flight(query(ray, t_max, 0.0, sampler), ray, mi, &t_end);
+    return flight(query(ray, t_max, 0.0, sampler, hint_of(from)), ray, mi, &t_end);
 }
 
-bool MacrofacetMedium::sample_free_flight_to_exit(const Ray& ray, float t_max, Sampler& sampler, MediumInteraction* mi,
-                                                  float* t_end) const {
-    return flight(query(ray, t_max, exit_level_, sampler), ray, mi, t_end);
+bool MacrofacetMedium::sample_free_flight_to_exit(const Ray& ray, float t_max, const MediumInteraction* from, Sampler& sampler,
+                                                  MediumInteraction* mi, float* t_end) const {
+    return flight(query(ray, t_max, exit_level_, sampler, hint_of(from)), ray, mi, t_end);
 }
 
 bool MacrofacetMedium::flight(const mf_track_query& q, const Ray& ray, MediumInteraction* mi, float* t_end) const {
@@ -202,6 +202,7 @@ bool MacrofacetMedium::flight(const mf_track_query& q, const Ray& ray, MediumInt
     mi->frame_n = from_mf(c.frame.normal);
     mi->frame_t = from_mf(c.frame.tangent);
     mi->sdf_f = float(c.f);
+    mi->surface_hint = c.hint;
     store_local(c.local, mi, 0);
     mi->medium = this;
     return true;
@@ -226,8 +227,9 @@ double MacrofacetMedium::depth_roulette(double f_from, double f_to, double u) co
     return survival;
 }
 
-Rgb MacrofacetMedium::transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const {
-    return transmittance_of(query(ray, t_max, exit_level_, sampler), t_end);
+Rgb MacrofacetMedium::transmittance_to_exit(const Ray& ray, float t_max, const MediumInteraction* from, Sampler& sampler,
+                                            float* t_end) const {
+    return transmittance_of(query(ray, t_max, exit_level_, sampler, hint_of(from)), t_end);
 }
 
 Rgb MacrofacetMedium::transmittance_of(const mf_track_query& q, float* t_end) const {

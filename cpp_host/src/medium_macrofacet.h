@@ -45,9 +45,12 @@ public:
                             MediumInteraction* mi, Rgb* weight, Rgb* pdf_ratio) const override;
     Rgb transmittance(const Ray& ray, float t_max, Sampler& sampler) const override;
     Rgb transmittance_kept(const Ray& ray, float t_max, Sampler& sampler, double survival) const override;
-    bool sample_free_flight_to_exit(const Ray& ray, float t_max, Sampler& sampler, MediumInteraction* mi,
-                                    float* t_end) const override;
-    Rgb transmittance_to_exit(const Ray& ray, float t_max, Sampler& sampler, float* t_end) const override;
+    bool sample_free_flight_to_exit(const Ray& ray, float t_max, const MediumInteraction* from, Sampler& sampler,
+                                    MediumInteraction* mi, float* t_end) const override;
+    Rgb transmittance_to_exit(const Ray& ray, float t_max, const MediumInteraction* from, Sampler& sampler,
+                              float* t_end) const override;
+    /// The hint of `from`, an event of this medium the ray leaves (0: none).
+    uint64_t hint_of(const MediumInteraction* from) const { return from && from->medium == this ? from->surface_hint : 0; }
     /// Let the tracking calls find each ray's exit from the region (mf_track_query::exit_level):
     /// only where the region's boundary encloses points with f <= exit_level alone, and with
     /// `near_scene` the shapes within exit_level of the boundary's box, none of them a medium

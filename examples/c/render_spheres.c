@@ -150,7 +150,7 @@ static double shadow(vec3 o, vec3 d, int inside, rng *r) {
     int hit = next_boundary(o, d, &t, &which, &entering);
     if (inside >= 0) {
       object *obj = &g_objects[inside];
-      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0};
+      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0, 0};
       mf_transmittance tr;
       check(mf_track_transmittance(obj->medium, obj->surface, NULL, &obj->shape, &q, &tr), "mf_track_transmittance");
       T *= tr.transmittance;
@@ -180,7 +180,7 @@ static double radiance(vec3 o, vec3 d, rng *r, double rgb[3]) {
     int hit = next_boundary(o, d, &t, &which, &entering);
     if (inside >= 0) {
       object *obj = &g_objects[inside];
-      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0};
+      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0, 0};
       mf_collision c;
       check(mf_track_free_flight(obj->medium, obj->surface, NULL, &obj->shape, &q, &c), "mf_track_free_flight");
       if (c.scattered) {

@@ -91,7 +91,10 @@ impl Scene<'_> {
         // Every fourth query finds its exit above an exit level from the shell's top to 2.75
         // times it, drawn from the seed's bits (the committed inputs' bytes keep their meaning).
         let exit_level = if seed % 4 == 0 { self.shell_top() * (1.0 + (seed >> 2 & 7) as f64 / 4.0) } else { 0.0 };
-        let q = mf_track_query { origin: vec3(origin), d, t_max, seed, exit_level, survival: 0.0 };
+        // Every fourth query carries a hint (any value is valid: most name no triangle of a small
+        // mesh, the rest a foreign one), also from the seed's bits.
+        let hint = if seed >> 5 & 3 == 0 { (seed >> 8) % 4096 } else { 0 };
+        let q = mf_track_query { origin: vec3(origin), d, t_max, seed, exit_level, survival: 0.0, hint };
         if debug() {
             eprintln!("query: {q:?}");
         }

@@ -154,7 +154,7 @@ public:
         const float key[7] = {ray.o.x(), ray.o.y(), ray.o.z(), ray.d.x(), ray.d.y(), ray.d.z(), ray.maxt};
         const double t_max = ray.maxt >= dr::Largest<Float> ? std::numeric_limits<double>::infinity() : double(ray.maxt);
         const mf_track_query query{mf_vec3{ray.o.x(), ray.o.y(), ray.o.z()}, unit(ray.d.x(), ray.d.y(), ray.d.z()), t_max,
-                                   hash_floats(key, 7, state_->seed_salt), 0.0, 0.0};
+                                   hash_floats(key, 7, state_->seed_salt), 0.0, 0.0, 0};
         mf_collision c;
         if (mf_track_free_flight(state_->medium, state_->surface->handle(), state_->field_handle(), state_->field_user_data(), &query, &c) !=
             MF_OK) {

@@ -1230,7 +1230,7 @@ static void test_opaque_core(void) {
   for (uint64_t seed = 0; seed < 32; ++seed) {
     /* from the start level, 30 degrees below the tangent plane: the ray reaches f = -0.134 */
     const double r = 1 + start;
-    mf_track_query in = {v3(0, 0, r), normalize(v3(sqrt(3.0), 0, -1)), INFINITY, seed, 0, 0};
+    mf_track_query in = {v3(0, 0, r), normalize(v3(sqrt(3.0), 0, -1)), INFINITY, seed, 0, 0, 0};
     mf_transmittance t;
     EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &in, &t));
     CHECK(t.transmittance == 0, "a ray into the core must be opaque (seed %llu: %g)", (unsigned long long)seed, t.transmittance);
@@ -1249,7 +1249,7 @@ static void test_opaque_core(void) {
   CHECK(survival > 0 && survival < 1, "2 sigma deep: survival %g", survival);
   {
     /* 5.7 degrees below the tangent plane from f = 0: the chord reaches 2.5 sigma deep */
-    mf_track_query kept = {v3(0, 0, 1), normalize(v3(10, 0, -1)), INFINITY, 3, 0, survival};
+    mf_track_query kept = {v3(0, 0, 1), normalize(v3(10, 0, -1)), INFINITY, 3, 0, survival, 0};
     mf_transmittance t;
     mf_collision c;
     EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &kept, &t));
@@ -1310,7 +1310,7 @@ static void test_surfaces_and_tracking(void) {
   /* Free flights and transmittance: same seed, same answer (built-in vs host sphere too). */
   double top = 0;
   EXPECT_OK(mf_medium_shell_top(m, &top));
-  const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99, 0, 0};
+  const mf_track_query q = {v3(0, 0, 1 + top), v3(0, 0, -1), INFINITY, 99, 0, 0, 0};
   mf_collision c1, c2;
   EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &c1));
   hs.calls = 0;
@@ -1333,15 +1333,34 @@ static void test_surfaces_and_tracking(void) {
   CHECK(vp.pdf == pdf && same_bits(&vp.value, &value, sizeof value), "mf_phase_eval_pdf must equal eval and pdf");
 
   mf_transmittance t1, t2;
-  const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5, 0, 0};
+  const mf_track_query up = {v3(0, 0, 1), normalize(v3(0.2, 0, 1)), INFINITY, 5, 0, 0, 0};
   EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t1));
   EXPECT_OK(mf_track_transmittance(m, sphere, NULL, NULL, &up, &t2));
   CHECK(t1.transmittance == t2.transmittance && t1.transmittance >= 0 && t1.transmittance <= 1,
         "transmittance %g / %g", t1.transmittance, t2.transmittance);
   /* Passing: t_max short of the shell. */
-  const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5, 0, 0};
+  const mf_track_query shortq = {v3(0, 0, 3), v3(0, 0, -1), 0.5, 5, 0, 0, 0};
   EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &shortq, &c1));
   CHECK(!c1.scattered && c1.t == 0.5, "a ray that ends above the shell passes (t = %g)", c1.t);
+  /* A mesh collision's hint: the calls that start there take it (mf_track_query::hint), and any
+     value is safe (a foreign triangle's, none past the last): the same flight and transmittance. */
+  const mf_track_query onto = {v3(0.6, 0.7, 3), v3(0, 0, -1), INFINITY, 7, 0, 0, 0};
+  EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &onto, &c1));
+  CHECK(c1.scattered && c1.hint != 0, "a collision in an octahedron's face hands on a hint (%llu)", (unsigned long long)c1.hint);
+  const uint64_t hints[4] = {c1.hint, c1.hint % 8 + 1, 9, UINT64_MAX};
+  const mf_vec3 escape = normalize(v3(0.2, -0.1, 1));
+  for (int h = 0; h < 4; ++h) {
+    const mf_track_query plain = {c1.p, escape, INFINITY, 11, 0, 0, 0}, hinted = {c1.p, escape, INFINITY, 11, 0, 0, hints[h]};
+    mf_collision e1, e2;
+    EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &plain, &e1));
+    EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &hinted, &e2));
+    CHECK(e1.scattered == e2.scattered && (e1.t == e2.t || fabs(e1.t - e2.t) <= 1e-12 * (1 + e1.t)), "hint %llu: flight t %.17g vs %.17g",
+          (unsigned long long)hints[h], e1.t, e2.t);
+    EXPECT_OK(mf_track_transmittance(m, mesh, NULL, NULL, &plain, &t1));
+    EXPECT_OK(mf_track_transmittance(m, mesh, NULL, NULL, &hinted, &t2));
+    CHECK(fabs(t1.transmittance - t2.transmittance) <= 1e-12, "hint %llu: transmittance %.17g vs %.17g",
+          (unsigned long long)hints[h], t1.transmittance, t2.transmittance);
+  }
 
   /* Batches equal single calls. */
   mf_track_query qs[3] = {q, up, shortq};
@@ -1510,7 +1529,7 @@ static void test_surfaces_and_tracking(void) {
     EXPECT_OK(mf_surface_eval(grid, NULL, v3(0.65, 0, 0), &gp));
     CHECK_ABS(gp.f, 0.05, 8e-3); /* trilinear error h²/8 × 2/|x| with h = 2/15 */
     CHECK(gp.normal.x > 0.99, "grid normal (%g, %g, %g)", gp.normal.x, gp.normal.y, gp.normal.z);
-    const mf_track_query gq = {v3(-3, 0.01, 0.02), v3(1, 0, 0), INFINITY, 3, 0, 0};
+    const mf_track_query gq = {v3(-3, 0.01, 0.02), v3(1, 0, 0), INFINITY, 3, 0, 0, 0};
     EXPECT_OK(mf_track_free_flight(m, grid, NULL, NULL, &gq, &c1));
     CHECK(c1.scattered && c1.stats.majorant_violations == 0, "a ray into the grid sphere scatters");
     mf_surface *g2 = (mf_surface *)0x1;
@@ -1554,7 +1573,7 @@ static void test_surfaces_and_tracking(void) {
     EXPECT_OK(mf_surface_eval(mesh, NULL, v3(em.positions[3 * i], em.positions[3 * i + 1], em.positions[3 * i + 2]), &at));
     CHECK(at.f <= exit_level, "enclosure vertex %zu has f = %g above the exit level %g", i, at.f, exit_level);
   }
-  const mf_track_query outward = {v3(2, 0, 0), v3(1, 0, 0), INFINITY, 7, exit_level, 0};
+  const mf_track_query outward = {v3(2, 0, 0), v3(1, 0, 0), INFINITY, 7, exit_level, 0, 0};
   mf_collision out_c;
   mf_transmittance out_t;
   EXPECT_OK(mf_track_free_flight(m, mesh, NULL, NULL, &outward, &out_c));
@@ -1636,7 +1655,7 @@ static void test_fields(void) {
   EXPECT_OK(mf_field_new_callbacks(&own_cb, &own));
   host_field same = {1, 0};
   for (uint64_t seed = 0; seed < 20; ++seed) {
-    const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, seed, 0, 0};
+    const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, seed, 0, 0, 0};
     mf_collision plain, through;
     EXPECT_OK(mf_track_free_flight(m, sphere, NULL, NULL, &q, &plain));
     EXPECT_OK(mf_track_free_flight(m, sphere, own, &same, &q, &through));
@@ -1651,7 +1670,7 @@ static void test_fields(void) {
   host_field stepped = {0, 0};
   int far_side = 0;
   for (uint64_t seed = 0; seed < 40; ++seed) {
-    const mf_track_query q = {v3(3, 0.2, 0.1), v3(-1, 0, 0), INFINITY, seed, 0, 0};
+    const mf_track_query q = {v3(3, 0.2, 0.1), v3(-1, 0, 0), INFINITY, seed, 0, 0, 0};
     mf_collision c;
     EXPECT_OK(mf_track_free_flight(m, sphere, field, &stepped, &q, &c));
     CHECK(c.stats.majorant_violations == 0, "violations with honest bounds");
@@ -1713,7 +1732,7 @@ static void test_fields(void) {
   bad.anisotropy[0] = 1, bad.anisotropy[1] = -1, bad.anisotropy[2] = 1;
   EXPECT_STATUS(mf_phase_eval_pdf_local(m, &bad, &fr, wi, wo, &half), MF_ERROR_INVALID_ARGUMENT, "positive definite");
   CHECK(same_bits(&half, &local, sizeof half), "a failed _local call wrote its out-parameter");
-  const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, 1, 0, 0};
+  const mf_track_query q = {v3(-3, 0.1, 0.2), v3(1, 0, 0), INFINITY, 1, 0, 0, 0};
   mf_collision c;
   host_field failing = {2, 0}, negative = {3, 0}, unknown = {4, 0};
   EXPECT_STATUS(mf_track_free_flight(m, sphere, field, &failing, &q, &c), MF_ERROR_CALLBACK, "returned 7");

@@ -167,7 +167,7 @@ std::vector<Result> work(const mf_medium *m, const mf_surface *surface, int t, i
     bad += mf_phase_eval(m, &frame, wi, wo, &r.value) != MF_OK;
     bad += mf_phase_pdf(m, &frame, wi, wo, &r.pdf) != MF_OK;
     // Tracking through the shared mesh: from a random point near the octahedron, inward.
-    const mf_track_query q = {{1.8 * d.x, 1.8 * d.y, 1.8 * d.z}, wi, t_max, static_cast<uint64_t>(t) << 32 | i, 0, 0};
+    const mf_track_query q = {{1.8 * d.x, 1.8 * d.y, 1.8 * d.z}, wi, t_max, static_cast<uint64_t>(t) << 32 | i, 0, 0, 0};
     mf_transmittance tr;
     bad += mf_track_free_flight(m, surface, nullptr, nullptr, &q, &r.tracked) != MF_OK;
     bad += mf_track_transmittance(m, surface, nullptr, nullptr, &q, &tr) != MF_OK;

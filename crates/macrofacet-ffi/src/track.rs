@@ -43,6 +43,12 @@ use std::ffi::c_void;
 /// `T / survival` (the host multiplies by nothing more), and the call's own roulette counts
 /// that weight.
 ///
+/// `hint` 0 (as zero-initialised): none. Otherwise, for a call that starts where a collision
+/// was (its escape flight, its shadow rays), that collision's [`mf_collision::hint`]: the call's
+/// first surface query begins its search there (on a mesh, at the collision's triangle). Any
+/// value is safe: a stale or foreign hint costs at most the search it fails to save, and the
+/// results are the same up to the rounding of another way to the same closest point.
+///
 /// [`mf_enclosure_exit_level`]: crate::surface::mf_enclosure_exit_level
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,6 +59,7 @@ pub struct mf_track_query {
     pub seed: u64,
     pub exit_level: f64,
     pub survival: f64,
+    pub hint: u64,
 }
 
 /// What one tracking call cost: surface queries (callbacks), tracked segments (bound queries),
@@ -83,6 +90,9 @@ pub struct mf_collision {
     /// The field's parameters at the collision (`set = 0` without a field or when passing).
     pub local: mf_local_params,
     pub stats: mf_track_stats,
+    /// Where the surface found the collision, for the calls that start there
+    /// ([`mf_track_query::hint`]); 0 for none (and when passing).
+    pub hint: u64,
 }
 
 /// The outcome of [`mf_track_transmittance`]: an unbiased estimate in `[0, 1]` over `[0, t]`:
@@ -112,6 +122,7 @@ struct Ray {
     exit_level: f64,
     /// 1 for none.
     survival: f64,
+    hint: u64,
 }
 
 /// A query's validated `survival` (0 as 1); only transmittances take one below 1.
@@ -139,12 +150,12 @@ fn query(q: &mf_track_query, transmittance: bool) -> FfiResult<Ray> {
         level if level.is_finite() && level > 0.0 => level,
         level => return Err(Error::new(ErrorKind::InvalidArgument, format!("exit_level must be 0 (none) or finite and at least the shell's top, got {level}")).into()),
     };
-    Ok(Ray { origin, d, t_max: q.t_max, exit_level, survival: survival(q, transmittance)? })
+    Ok(Ray { origin, d, t_max: q.t_max, exit_level, survival: survival(q, transmittance)?, hint: q.hint })
 }
 
 /// One call: a free flight or a transmittance, with the field (if any) and the host's data. The
 /// result is written into `out` once the call has succeeded (nothing is written on an error):
-/// in place, because `mf_collision` is 224 bytes and moving it out through the visitor, the
+/// in place, because `mf_collision` is 232 bytes and moving it out through the visitor, the
 /// `Result`s and the C boundary took a third of the calls' `memcpy` traffic.
 struct Call<'a> {
     out: Out<'a>,
@@ -168,12 +179,12 @@ impl SurfaceVisitor for Call<'_> {
         match self.field {
             // The collision reports no uv: the tracker need not complete it.
             None => {
-                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv().after_roulette(self.ray.survival)?;
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &Constant).without_uv().from_hint(self.ray.hint).after_roulette(self.ray.survival)?;
                 run(self.out, self.ray, self.seed, &tracker)
             }
             Some(field) => {
                 let field = CallbackField::new(field, self.user_data);
-                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv().after_roulette(self.ray.survival)?;
+                let tracker = Tracker::with_bounds(self.medium, self.bounds, surface, &field).without_uv().from_hint(self.ray.hint).after_roulette(self.ray.survival)?;
                 run(self.out, self.ray, self.seed, &tracker)
             }
         }
@@ -183,7 +194,7 @@ impl SurfaceVisitor for Call<'_> {
 /// The collision record of a ray that passed to `t` (the other fields zero).
 fn passed(t: f64, stats: mf_track_stats) -> mf_collision {
     let zero = DVec3::ZERO.into();
-    mf_collision { scattered: false, t, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, local: mf_local_params::NONE, stats }
+    mf_collision { scattered: false, t, p: zero, f: 0.0, frame: mf_frame { normal: zero, tangent: zero }, local: mf_local_params::NONE, stats, hint: 0 }
 }
 
 fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: Ray, seed: u64, tracker: &Tracker<S, F>) -> macrofacet::error::Result<()> {
@@ -195,7 +206,7 @@ fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: Ray, seed: u64, tracke
         Out::FreeFlight(slot) => {
             let (flight, t_end) = if exits { tracker.sample_free_flight_to_exit(origin, d, t_max, exit_level, rng, &mut stats)? } else { (tracker.sample_free_flight(origin, d, t_max, rng, &mut stats)?, t_max) };
             *slot = match flight {
-                TrackedFlight::Scatter { t, point, local } => mf_collision {
+                TrackedFlight::Scatter { t, point, local, hint } => mf_collision {
                     scattered: true,
                     t,
                     p: (origin + t * d).into(),
@@ -203,6 +214,7 @@ fn run<S: MeanSurface, F: MediumField>(out: Out<'_>, ray: Ray, seed: u64, tracke
                     frame: mf_frame { normal: point.normal.into(), tangent: point.tangent.into() },
                     local: (&local).into(),
                     stats: stats.into(),
+                    hint,
                 },
                 TrackedFlight::Pass => passed(t_end, stats.into()),
             };

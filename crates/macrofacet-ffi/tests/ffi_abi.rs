@@ -491,7 +491,7 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
             let origin = rng.direction() * (0.6 + 0.8 * rng.next());
             let d = rng.direction().normalize();
             let t_max = if i % 3 == 0 { f64::INFINITY } else { 2.0 * rng.next() };
-            queries.push(mf_track_query { origin: v(origin), d: v(d), t_max, seed: i * 7919 + 1, exit_level: 0.0, survival: 0.0 });
+            queries.push(mf_track_query { origin: v(origin), d: v(d), t_max, seed: i * 7919 + 1, exit_level: 0.0, survival: 0.0, hint: 0 });
         }
         let stats = |s: &TrackStats| mf_track_stats { surface_queries: s.surface_queries, segments: s.segments, tentative_collisions: s.tentative_collisions, majorant_violations: s.majorant_violations };
         let mut flights = vec![unsafe { std::mem::zeroed::<mf_collision>() }; queries.len()];
@@ -554,7 +554,7 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
             assert_eq!(survival.to_bits(), expected.to_bits(), "{name}: depth roulette ({f_from}, {f_to}, {u})");
             if survival > 0.0 && survival < 1.0 {
                 let (o, d) = (DVec3::new(0.0, 0.0, 1.0 + f_from), DVec3::new(1.0, 0.0, -0.2).normalize());
-                let q = mf_track_query { origin: v(o), d: v(d), t_max: f64::INFINITY, seed: 17, exit_level: 0.0, survival };
+                let q = mf_track_query { origin: v(o), d: v(d), t_max: f64::INFINITY, seed: 17, exit_level: 0.0, survival, hint: 0 };
                 let d = check_direction("d", d).unwrap();
                 let mut t = unsafe { std::mem::zeroed::<mf_transmittance>() };
                 assert_eq!(unsafe { mf_track_transmittance(medium, handle, ptr::null(), ptr::null_mut(), &q, &mut t) }, mf_status::MF_OK, "{name}");

@@ -282,7 +282,7 @@ fn rough_medium_around_a_sphere_has_a_bounded_cost() {
     let zero = mf_vec3 { x: 0.0, y: 0.0, z: 0.0 };
     let pole = mf_vec3 { x: 0.8802167343846036, y: 0.0000006623900790494924, z: 0.4745719128950485 };
     assert_eq!(unsafe { mf_surface_new_sphere(zero, 986.18349699642, false, pole, &mut sphere) }, mf_status::MF_OK);
-    let q = mf_track_query { origin: mf_vec3 { x: -0.0, y: 0.0, z: -5.39063829912263 }, d: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, t_max: f64::INFINITY, seed: 0, exit_level: 0.0, survival: 0.0 };
+    let q = mf_track_query { origin: mf_vec3 { x: -0.0, y: 0.0, z: -5.39063829912263 }, d: mf_vec3 { x: 0.0, y: 0.0, z: 1.0 }, t_max: f64::INFINITY, seed: 0, exit_level: 0.0, survival: 0.0, hint: 0 };
     let mut t = mf_transmittance { transmittance: -1.0, t: 0.0, stats: mf_track_stats::default() };
     let status = unsafe { mf_track_transmittance(m, sphere, ptr::null(), ptr::null_mut(), &q, &mut t) };
     assert_eq!(status, mf_status::MF_OK);
@@ -330,7 +330,7 @@ unsafe extern "C" fn counted_sphere(user_data: *mut std::ffi::c_void, p: mf_vec3
 fn free_flight_from_deep_inside_a_thin_medium_ends() {
     let m = medium(&[("sigma", 1e-50), ("lengthscale", 1.4142135623730952e-44)], &[("distribution", "ggx")]);
     let surface = callback_surface(counted_sphere, MF_SURFACE_CONVEX, mf_vec3 { x: -RADIUS, y: -RADIUS, z: -RADIUS }, mf_vec3 { x: RADIUS, y: RADIUS, z: RADIUS });
-    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, d: mf_vec3 { x: -0.0, y: 1.0, z: -1e-300 }, t_max: f64::INFINITY, seed: 49730685199106, exit_level: 0.0, survival: 0.0 };
+    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.0 }, d: mf_vec3 { x: -0.0, y: 1.0, z: -1e-300 }, t_max: f64::INFINITY, seed: 49730685199106, exit_level: 0.0, survival: 0.0, hint: 0 };
     let mut calls = 0u64;
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), &mut calls as *mut u64 as *mut std::ffi::c_void, &q, c.as_mut_ptr()) };
@@ -377,7 +377,7 @@ unsafe extern "C" fn sphere_with_bad_tangent(user_data: *mut std::ffi::c_void, p
 fn segment_end_from_a_callback_is_checked() {
     let m = medium(&[("sigma", 0.01), ("alpha", 0.3)], &[("distribution", "beckmann")]);
     let surface = callback_surface(sphere_with_bad_tangent, MF_SURFACE_CONVEX, mf_vec3 { x: -1.0, y: -1.0, z: -1.0 }, mf_vec3 { x: 1.0, y: 1.0, z: 1.0 });
-    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 1.02 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 1, exit_level: 0.0, survival: 0.0 };
+    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 1.02 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 1, exit_level: 0.0, survival: 0.0, hint: 0 };
     let mut calls = 0u64;
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), &mut calls as *mut u64 as *mut std::ffi::c_void, &q, c.as_mut_ptr()) };
@@ -424,7 +424,7 @@ fn plane_majorant_holds_at_rounded_positions() {
         }
     };
     for seed in (0..40).chain([8361610016553369471]) {
-        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed, exit_level: 0.0, survival: 0.0 };
+        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed, exit_level: 0.0, survival: 0.0, hint: 0 };
         let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
         let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
         tally(status, (status == mf_status::MF_OK).then(|| unsafe { c.assume_init() }.stats), seed);
@@ -472,7 +472,7 @@ unsafe extern "C" fn long_normal_plane(_: *mut std::ffi::c_void, p: mf_vec3, out
 fn collision_frame_is_unit() {
     let m = medium(&[("sigma", 0.01), ("alpha", 0.3)], &[("distribution", "beckmann")]);
     let surface = callback_surface(long_normal_plane, MF_SURFACE_CONVEX, mf_vec3 { x: f64::NEG_INFINITY, y: f64::NEG_INFINITY, z: f64::NEG_INFINITY }, mf_vec3 { x: f64::INFINITY, y: f64::INFINITY, z: 0.0 });
-    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.05 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 3, exit_level: 0.0, survival: 0.0 };
+    let q = mf_track_query { origin: mf_vec3 { x: 0.0, y: 0.0, z: 0.05 }, d: mf_vec3 { x: 0.0, y: 0.0, z: -1.0 }, t_max: f64::INFINITY, seed: 3, exit_level: 0.0, survival: 0.0, hint: 0 };
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     assert_eq!(unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) }, mf_status::MF_OK, "{}", last_error());
     let c = unsafe { c.assume_init() };
@@ -504,7 +504,7 @@ fn violations(m: *const mf_medium, surface: *const mf_surface, origin: mf_vec3, 
 fn violations_of_calls(m: *const mf_medium, surface: *const mf_surface, origin: mf_vec3, d: mf_vec3, t_max: f64, seeds: impl IntoIterator<Item = u64>, errors_allowed: bool) -> (u32, u32) {
     let (mut free_flight, mut transmittance) = (0, 0);
     for seed in seeds {
-        let q = mf_track_query { origin, d, t_max, seed, exit_level: 0.0, survival: 0.0 };
+        let q = mf_track_query { origin, d, t_max, seed, exit_level: 0.0, survival: 0.0, hint: 0 };
         let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
         let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
         assert!(errors_allowed || status == mf_status::MF_OK, "{status:?}: {}", last_error());
@@ -822,7 +822,7 @@ fn empty_segments_deep_inside_a_mesh_grow() {
     let (positions, indices) = octahedron(1000.0000000010001);
     let (normals, _) = octahedron(1.0);
     let surface = accepted_mesh(&positions, &indices, Some(&normals));
-    let q = mf_track_query { origin: mf_vec3 { x: -0.0002730159346467071, y: 0.00025508563872220756, z: 138.41286895550982 }, d: mf_vec3 { x: 0.0, y: 1.0, z: 0.0 }, t_max: 78.1264188243673, seed: 16276397599167177057, exit_level: 0.0, survival: 0.0 };
+    let q = mf_track_query { origin: mf_vec3 { x: -0.0002730159346467071, y: 0.00025508563872220756, z: 138.41286895550982 }, d: mf_vec3 { x: 0.0, y: 1.0, z: 0.0 }, t_max: 78.1264188243673, seed: 16276397599167177057, exit_level: 0.0, survival: 0.0, hint: 0 };
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
     assert_eq!(status, mf_status::MF_OK, "{}", last_error());
@@ -848,7 +848,7 @@ fn segment_below_the_rounding_of_t_stops_the_call() {
     let c = 1.000000000000001;
     let mut sphere = ptr::null_mut();
     assert_eq!(unsafe { mf_surface_new_sphere(mf_vec3 { x: c, y: c, z: c }, c, true, mf_vec3 { x: c, y: c, z: c }, &mut sphere) }, mf_status::MF_OK);
-    let q = mf_track_query { origin: mf_vec3 { x: c, y: -1.4810521216686835e-267, z: -4.8587479139867144e64 }, d: mf_vec3 { x: 0.0003564864423334052, y: 0.0, z: 0.9999999364587062 }, t_max: f64::INFINITY, seed: 0, exit_level: 0.0, survival: 0.0 };
+    let q = mf_track_query { origin: mf_vec3 { x: c, y: -1.4810521216686835e-267, z: -4.8587479139867144e64 }, d: mf_vec3 { x: 0.0003564864423334052, y: 0.0, z: 0.9999999364587062 }, t_max: f64::INFINITY, seed: 0, exit_level: 0.0, survival: 0.0, hint: 0 };
     let mut flight = std::mem::MaybeUninit::<mf_collision>::uninit();
     let status = unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, flight.as_mut_ptr()) };
     assert_eq!(status, mf_status::MF_ERROR_INVALID_ARGUMENT);
@@ -931,7 +931,7 @@ fn mesh_seen_from_the_end_of_f64() {
     assert_eq!(status, mf_status::MF_OK, "{}", last_error());
     let n = point.normal;
     assert!(point.f > 0.0 && (length(n) - 1.0).abs() < 1e-12, "{point:?}");
-    let q = mf_track_query { origin, d: mf_vec3 { x: 6.9510363278929e-7, y: 0.0, z: 0.9999999999997584 }, t_max: f64::INFINITY, seed: 0, exit_level: 0.0, survival: 0.0 };
+    let q = mf_track_query { origin, d: mf_vec3 { x: 6.9510363278929e-7, y: 0.0, z: 0.9999999999997584 }, t_max: f64::INFINITY, seed: 0, exit_level: 0.0, survival: 0.0, hint: 0 };
     let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
     let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
     assert!(status == mf_status::MF_OK || status == mf_status::MF_ERROR_INVALID_ARGUMENT, "{status:?}: {}", last_error());
@@ -964,7 +964,7 @@ fn plane_majorant_holds_far_along_the_ray() {
     let origin = mf_vec3 { x: -1.3621627434734314e50, y: -3.816233434913849e50, z: -1.0198671032402877e225 };
     let d = glam::DVec3::new(-0.00022257322900991308, -0.0004917331059362258, 0.9999988543297802).normalize();
     for seed in 0..4 {
-        let q = mf_track_query { origin, d: mf_vec3 { x: d.x, y: d.y, z: d.z }, t_max: f64::INFINITY, seed, exit_level: 0.0, survival: 0.0 };
+        let q = mf_track_query { origin, d: mf_vec3 { x: d.x, y: d.y, z: d.z }, t_max: f64::INFINITY, seed, exit_level: 0.0, survival: 0.0, hint: 0 };
         let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
         match unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) } {
             mf_status::MF_OK => assert_eq!(unsafe { c.assume_init() }.stats.majorant_violations, 0, "seed {seed}"),
@@ -1069,7 +1069,7 @@ fn segment_bound_keeps_a_candidate() {
     let origin = mf_vec3 { x: -1.4947998053850968, y: 0.4235294119557993, z: 0.42352941196061145 };
     let d = mf_vec3 { x: -0.9826117664013281, y: -0.1836819729199024, z: 0.027113972215260865 };
     for seed in (0..200).chain([18446744073709520775]) {
-        let q = mf_track_query { origin, d, t_max: 9.000000004163024, seed, exit_level: 0.0, survival: 0.0 };
+        let q = mf_track_query { origin, d, t_max: 9.000000004163024, seed, exit_level: 0.0, survival: 0.0, hint: 0 };
         let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
         let status = unsafe { mf_track_free_flight(m, surface, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
         assert_ne!(status, mf_status::MF_ERROR_INTERNAL, "seed {seed}: {}", last_error());
@@ -1145,7 +1145,7 @@ fn ray_beyond_the_range_of_f64_is_never_a_collision() {
     let origin = mf_vec3 { x: -1e300, y: -1e300, z: -1e300 };
     let d = mf_vec3 { x: -0.364599518083765, y: 0.8533899574065312, z: 0.37254901960784315 };
     for seed in 0..20 {
-        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed, exit_level: 0.0, survival: 0.0 };
+        let q = mf_track_query { origin, d, t_max: f64::INFINITY, seed, exit_level: 0.0, survival: 0.0, hint: 0 };
         let mut c = std::mem::MaybeUninit::<mf_collision>::uninit();
         let status = unsafe { mf_track_free_flight(m, sphere, ptr::null(), ptr::null_mut(), &q, c.as_mut_ptr()) };
         if status != mf_status::MF_OK {

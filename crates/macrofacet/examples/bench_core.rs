@@ -249,7 +249,7 @@ fn macrofacet_walk<F: MediumField>(tracker: &Tracker<planar::PlaneSurface, F>, m
     for bounces in 0..100 {
         match tracker.sample_free_flight(o, d, f64::INFINITY, rng, &mut stats).unwrap() {
             TrackedFlight::Pass => return bounces,
-            TrackedFlight::Scatter { t, point, local } => {
+            TrackedFlight::Scatter { t, point, local, .. } => {
                 let frame = macrofacet::frame::Frame::from_normal_tangent(point.normal, point.tangent).unwrap();
                 let local_medium = medium.localized(&local, &frame).unwrap();
                 let u: [f64; PHASE_SAMPLE_DIMENSIONS] = std::array::from_fn(|_| rng.next_f64());

@@ -72,8 +72,9 @@ impl TrackStats {
 pub enum TrackedFlight {
     /// A real collision at distance `t`, where the surface is `point` (its frame is the local
     /// frame of the phase function there; its normal unit; its uv completed unless the tracker
-    /// was built [`Tracker::without_uv`]).
-    Scatter { t: f64, point: SurfacePoint, local: LocalParams },
+    /// was built [`Tracker::without_uv`]). `hint` names where the surface found it, for the calls
+    /// that start there ([`Tracker::from_hint`]; 0 for none).
+    Scatter { t: f64, point: SurfacePoint, local: LocalParams, hint: u64 },
     /// No collision in `[0, t_max]`.
     Pass,
 }
@@ -433,6 +434,8 @@ pub struct Tracker<'a, S: MeanSurface, F: MediumField = Constant> {
     complete_uv: bool,
     /// The probability with which the caller kept its shadow rays ([`Self::after_roulette`]).
     survival: f64,
+    /// Where the calls start, from an earlier collision there ([`Self::from_hint`]; 0: none).
+    hint: u64,
 }
 
 /// A tracker's projected-area bounds: the host's, or its own (boxed: a tracker is built per
@@ -507,7 +510,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     fn assemble(medium: &'a MacrofacetMedium, area: Area<'a>, surface: &'a S, field: &'a F) -> Self {
         let region = HeightProfile { sigma: field.sigma_max().unwrap_or(medium.height.sigma), ..medium.height };
         // (The area's distribution is the medium's: `with_bounds` checks it.)
-        Tracker { medium, surface, field, isotropic: area.get().isotropic, area, region, complete_uv: true, survival: 1.0 }
+        Tracker { medium, surface, field, isotropic: area.get().isotropic, area, region, complete_uv: true, survival: 1.0, hint: 0 }
     }
 
     /// A tracker whose collisions keep the uv the tracker's queries gave (possibly none) instead
@@ -515,6 +518,15 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
     /// ABI, whose collisions carry no uv (a sphere's costs an `atan2` and an `acos`).
     pub fn without_uv(mut self) -> Self {
         self.complete_uv = false;
+        self
+    }
+
+    /// A tracker whose calls start where a collision of an earlier call was, with that
+    /// collision's `hint` ([`TrackedFlight::Scatter`]): the first surface query begins its search
+    /// there ([`MeanSurface::seed_cache`]; any value is safe). A collision's escape flight and
+    /// shadow rays start so.
+    pub fn from_hint(mut self, hint: u64) -> Self {
+        self.hint = hint;
         self
     }
 
@@ -529,6 +541,15 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         }
         self.survival = survival;
         Ok(self)
+    }
+
+    /// Seeds a call's fresh cache with the tracker's hint (in place: a mesh's cache is half a
+    /// kilobyte, which returning it by value copied).
+    #[inline]
+    fn seed(&self, cache: &mut S::Cache) {
+        if self.hint != 0 {
+            self.surface.seed_cache(cache, self.hint);
+        }
     }
 
     fn height(&self) -> &HeightProfile {
@@ -997,6 +1018,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             return Ok((TrackedFlight::Pass, 0.0));
         }
         let mut cache = S::Cache::default();
+        self.seed(&mut cache);
         let mut t = t_enter;
         let mut p = ray_point(origin, t, d)?;
         let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;
@@ -1032,7 +1054,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     // completed where the tracker's queries left it out (MeanSurface::uv).
                     let uv = if self.complete_uv { self.surface.uv(p, &point) } else { point.uv };
                     let point = SurfacePoint { normal: point.normal.normalize(), uv, ..point };
-                    return Ok((TrackedFlight::Scatter { t: seg.t + s, point, local }, seg.t + s));
+                    return Ok((TrackedFlight::Scatter { t: seg.t + s, point, local, hint: self.surface.hint(&cache) }, seg.t + s));
                 }
                 // (A tentative collision at the segment's start would not advance the ray.)
                 if Self::restarts_at_tentative(&seg) && seg.t + s > seg.t {
@@ -1073,6 +1095,7 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
             return Ok((1.0, 0.0));
         }
         let mut cache = S::Cache::default();
+        self.seed(&mut cache);
         let mut t = t_enter;
         let mut p = ray_point(origin, t, d)?;
         let mut start = self.checked(self.surface.start_point(p, &mut cache), p, stats)?;

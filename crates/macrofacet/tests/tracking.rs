@@ -1355,3 +1355,49 @@ fn a_depth_roulette_keeps_transmittance_unbiased() {
     assert_eq!(roulette_survival(0.9), 1.0);
     assert_eq!(roulette_survival(f64::NAN), 1.0);
 }
+
+#[test]
+fn hints_change_no_result() {
+    // A collision's hint (TrackedFlight::Scatter) seeds the first query of the calls that start
+    // there (Tracker::from_hint), and any value is safe. From collisions on a shaded torus and a
+    // flat cube, escape flights and shadow rays with the collision's own hint, a foreign
+    // triangle's, one past the last triangle and u64::MAX agree with those without (same seeds).
+    let m = medium(Ndf::Beckmann(Beckmann::new(0.3, 0.3).unwrap()), 1e-3);
+    for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 48, 24)), ("cube", meshes::cube())] {
+        let surface = mesh_surface(&mesh);
+        let n = mesh.indices.len() as u64;
+        let plain = Tracker::new(&m, &surface);
+        let (mut collisions, mut hinted) = (0, 0);
+        let mut rng = Pcg32::new(41, 5);
+        let mut stats = TrackStats::default();
+        for i in 0..400u64 {
+            let o = 3.0 * common::spherical((2.0 * rng.next_f64() - 1.0).acos(), 2.0 * std::f64::consts::PI * rng.next_f64());
+            let aim = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, 0.2 * (rng.next_f64() - 0.5));
+            let d = (aim - o).normalize();
+            let TrackedFlight::Scatter { t, hint, .. } = plain.sample_free_flight(o, d, f64::INFINITY, &mut Pcg32::new(i, 1), &mut stats).unwrap() else { continue };
+            collisions += 1;
+            hinted += usize::from(hint != 0);
+            let p = o + t * d;
+            // Half the directions leave the surface, half enter it.
+            let w = common::spherical((2.0 * rng.next_f64() - 1.0).acos(), 2.0 * std::f64::consts::PI * rng.next_f64());
+            for h in [hint, (hint + 17) % n + 1, n + 1, u64::MAX] {
+                let hinted_tracker = Tracker::new(&m, &surface).from_hint(h);
+                let a = plain.sample_free_flight(p, w, f64::INFINITY, &mut Pcg32::new(i, 2), &mut stats).unwrap();
+                let b = hinted_tracker.sample_free_flight(p, w, f64::INFINITY, &mut Pcg32::new(i, 2), &mut stats).unwrap();
+                match (a, b) {
+                    (TrackedFlight::Scatter { t: ta, point: pa, .. }, TrackedFlight::Scatter { t: tb, point: pb, .. }) => {
+                        assert!((ta - tb).abs() <= 1e-9 * ta.max(1e-3), "{name} ray {i}, hint {h}: {ta} vs {tb}");
+                        assert!((pa.normal - pb.normal).length() <= 1e-9, "{name} ray {i}, hint {h}: {pa:?} vs {pb:?}");
+                    }
+                    (TrackedFlight::Pass, TrackedFlight::Pass) => {}
+                    other => panic!("{name} ray {i}, hint {h}: {other:?}"),
+                }
+                let ta = plain.transmittance(p, w, f64::INFINITY, &mut Pcg32::new(i, 3), &mut stats).unwrap();
+                let tb = hinted_tracker.transmittance(p, w, f64::INFINITY, &mut Pcg32::new(i, 3), &mut stats).unwrap();
+                assert!((ta - tb).abs() <= 1e-9 * ta.max(1.0), "{name} ray {i}, hint {h}: transmittance {ta} vs {tb}");
+            }
+        }
+        // Most collisions lie in a triangle's certified region, and hand it on.
+        assert!(collisions >= 200 && 10 * hinted >= 9 * collisions, "{name}: {hinted} of {collisions} collisions hinted");
+    }
+}

@@ -273,6 +273,18 @@ pub trait MeanSurface {
         self.start_point(p, cache)
     }
 
+    /// Where the last query with `cache` found the surface, as a value that a later call starting
+    /// at that point may hand to [`Self::seed_cache`] (a mesh: the triangle of its segment); 0
+    /// when the surface has nothing worth handing on.
+    fn hint(&self, _cache: &Self::Cache) -> u64 {
+        0
+    }
+
+    /// Seeds a fresh `cache` with a [`Self::hint`]: the call's first query begins its search
+    /// there. Any value is safe (a stale or foreign one costs at most the search it fails to
+    /// save): answers are the same, up to the rounding of another way to the same closest point.
+    fn seed_cache(&self, _cache: &mut Self::Cache, _hint: u64) {}
+
     /// The texture coordinates at `p`, where a query answered `point`. A surface whose `uv`
     /// costs more than the rest of a query (a sphere's two angles) may leave it zero in
     /// [`Self::start_point`], [`Self::point_on_segment`] and [`SegmentBound::end`] and give it

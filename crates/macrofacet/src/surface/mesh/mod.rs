@@ -116,7 +116,8 @@ pub struct MeshCache {
     /// The current segment lies in the face region of its one candidate: a point query there
     /// is that triangle's projection ([`region::FaceRegion::face_closest`]).
     certified: bool,
-    /// A point of the ray and the triangle closest to it (the start of the next segment).
+    /// A point of the ray and the triangle closest to it (the start of the next segment); at NaN,
+    /// a caller's hint ([`MeanSurface::seed_cache`]) that no query has confirmed yet.
     hint: Option<(DVec3, u32)>,
 }
 
@@ -376,7 +377,7 @@ impl TriangleMesh {
     }
 
     /// The triangle recorded in `cache` as closest to a point of the current ray.
-    fn hint(cache: &MeshCache) -> Option<u32> {
+    fn recorded(cache: &MeshCache) -> Option<u32> {
         cache.hint.map(|(_, i)| i)
     }
 
@@ -502,7 +503,7 @@ impl TriangleMesh {
         let mut bound = SegmentBound::lipschitz(start.f, length, self.lipschitz());
         if length <= reach {
             // The triangle closest at the start, when the cache recorded it there.
-            let nearest = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::hint(cache)).triangle);
+            let nearest = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::recorded(cache)).triangle);
             let end = closest_on_triangle(&self.triangles[nearest as usize], p + length * d, nearest);
             let chord = [start.f.abs() + PAD * self.epsilon, end.distance_sq.sqrt() + PAD * self.epsilon];
             if start.f > 0.0 {
@@ -531,7 +532,7 @@ impl TriangleMesh {
     fn certified_bound(&self, p: DVec3, d: DVec3, length: f64, tolerance: f64, cache: &mut MeshCache) -> std::result::Result<SegmentBound, (f64, Option<ZonePair>)> {
         // A triangle recorded at `p` is the closest there (every query and bound records the
         // closest): asking again would find it, or one as close, again.
-        let i = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::hint(cache)).triangle);
+        let i = Self::hint_at(cache, p).unwrap_or_else(|| self.closest(p, Self::recorded(cache)).triangle);
         let region = &self.regions[i as usize];
         let tri = &self.triangles[i as usize];
         let piece = region.piece(tri.n, p, d, length).map_or(0.0, |piece| piece.length);
@@ -721,9 +722,23 @@ impl MeanSurface for TriangleMesh {
     }
 
     fn start_point(&self, p: DVec3, cache: &mut MeshCache) -> Result<SurfacePoint> {
-        let closest = self.closest(p, Self::hint(cache));
+        let closest = self.closest(p, Self::recorded(cache));
         cache.hint = Some((p, closest.triangle));
         Ok(self.surface_point(p, &closest))
+    }
+
+    fn hint(&self, cache: &MeshCache) -> u64 {
+        // On a certified segment a point's closest triangle is its one candidate; elsewhere the
+        // triangle last found closest to a point of the ray is near.
+        let i = if cache.certified { cache.candidates.first().copied() } else { Self::recorded(cache) };
+        i.map_or(0, |i| u64::from(i) + 1)
+    }
+
+    fn seed_cache(&self, cache: &mut MeshCache, hint: u64) {
+        // Recorded at no point (NaN): `hint_at` trusts only triangles a query found closest.
+        if let Some(i) = hint.checked_sub(1).filter(|&i| i < self.triangles.len() as u64) {
+            cache.hint = Some((DVec3::NAN, i as u32));
+        }
     }
 
     fn end_point(&self, p: DVec3, cache: &mut MeshCache) -> Result<SurfacePoint> {
@@ -743,7 +758,7 @@ impl MeanSurface for TriangleMesh {
         let found = if cache.candidates.is_empty() { Closest::NONE } else { closest_among(&self.triangles, p, &cache.candidates, Closest::NONE) };
         if found.triangle == Closest::NONE.triangle {
             // A query of the whole mesh, from the triangle closest to a point of this ray.
-            return Ok(self.surface_point(p, &self.closest(p, Self::hint(cache))));
+            return Ok(self.surface_point(p, &self.closest(p, Self::recorded(cache))));
         }
         Ok(self.surface_point(p, &found))
     }
@@ -801,7 +816,7 @@ impl MeanSurface for TriangleMesh {
             if !(start.f < -tolerance && self.grid.segment(p, d, length, &mut cache.candidates)) {
                 return far(cache);
             }
-            end_closest = self.closest(end_p, Self::hint(cache));
+            end_closest = self.closest(end_p, Self::recorded(cache));
             f_end = self.surface_point(end_p, &end_closest).f;
             tent = (start.f.abs(), f_end.abs());
             // Drop the triangles whose bounding sphere stays beyond the tent from the segment.

@@ -943,10 +943,11 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         Ok((t, ray_point(seg.p, seg.bound.length, d)?))
     }
 
-    /// Where a segment that passed ends the call, at `t` its end, before the surface point there
-    /// is computed: where the segment's end is known (counted as the query it saves), past the
-    /// clipped interval, or above the exit level (`EXITS`); the checks the loop's top would make
-    /// first. A thin shell's calls mostly end so, within their first segment.
+    /// Whether the call ends at `t`, the end of `seg` (passed), before the surface point there is
+    /// computed; if so, the distance it reports. Only where the segment's end is known (counted as
+    /// the query it saves), by the checks the loop's top would make first: the ray past the
+    /// clipped interval, or (`EXITS`) above the exit level. A thin shell's calls mostly end so,
+    /// within their first segment.
     #[inline(always)]
     fn ends_after<const EXITS: bool>(seg: &Segment, t: f64, t_max: f64, t_exit: f64, exit_level: f64, stats: &mut TrackStats) -> Option<f64> {
         let f = seg.bound.end.f()?;

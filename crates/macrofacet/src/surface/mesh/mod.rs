@@ -728,10 +728,9 @@ impl MeanSurface for TriangleMesh {
     }
 
     fn hint(&self, cache: &MeshCache) -> u64 {
-        // On a certified segment a point's closest triangle is its one candidate; elsewhere the
-        // triangle last found closest to a point of the ray is near.
-        let i = if cache.certified { cache.candidates.first().copied() } else { Self::recorded(cache) };
-        i.map_or(0, |i| u64::from(i) + 1)
+        // The triangle last found closest to a point of the ray: on a certified segment its one
+        // candidate (`certified_bound` records it), elsewhere near.
+        Self::recorded(cache).map_or(0, |i| u64::from(i) + 1)
     }
 
     fn seed_cache(&self, cache: &mut MeshCache, hint: u64) {
@@ -743,11 +742,11 @@ impl MeanSurface for TriangleMesh {
 
     fn end_point(&self, p: DVec3, cache: &mut MeshCache) -> Result<SurfacePoint> {
         // The end of a certified piece (`certified_bound`, which recorded its triangle there):
-        // its projection, as the bound's end height was computed.
-        match Self::hint_at(cache, p) {
-            Some(i) if cache.certified => Ok(self.surface_point(p, &self.regions[i as usize].face_closest(self.triangles[i as usize].n, p, i))),
-            _ => self.start_point(p, cache),
+        // a point of its segment, its projection, as the bound's end height was computed.
+        if cache.certified && Self::hint_at(cache, p).is_some() {
+            return self.point_on_segment(p, cache);
         }
+        self.start_point(p, cache)
     }
 
     fn point_on_segment(&self, p: DVec3, cache: &MeshCache) -> Result<SurfacePoint> {

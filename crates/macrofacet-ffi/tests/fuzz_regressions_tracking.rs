@@ -59,6 +59,7 @@ fn length(v: mf_vec3) -> f64 {
 /// - from 1e77 to 1e102 the mesh is accepted but `mf_surface_eval` at its centre answers
 ///   `f = +s` with normal (-1, 0, 0) instead of `-s/√3` (a product of squared lengths, ~s⁴,
 ///   overflows in the inside/outside decision): a wrong number with MF_OK.
+///
 /// A mesh whose size the library cannot handle must be refused with MF_ERROR_INVALID_ARGUMENT
 /// and a reason; one it accepts must answer right.
 #[test]

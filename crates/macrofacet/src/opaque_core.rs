@@ -114,7 +114,7 @@ mod tests {
             assert_eq!(core.start_level, -START_SIGMAS * sigma);
             let depth = kappa * density_integral(&height, core.core_level, core.start_level);
             // At least the opaque depth, and no deeper than needed (the quadrature's error ~1e-9).
-            assert!(depth >= OPAQUE_DEPTH * (1.0 - 1e-9) && depth <= OPAQUE_DEPTH * 1.001, "sigma {sigma}, kappa {kappa}: depth {depth}");
+            assert!((OPAQUE_DEPTH * (1.0 - 1e-9)..=OPAQUE_DEPTH * 1.001).contains(&depth), "sigma {sigma}, kappa {kappa}: depth {depth}");
         }
     }
 

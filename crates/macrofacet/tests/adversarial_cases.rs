@@ -406,8 +406,8 @@ fn fuzz_grazing_visible_normals_keep_weight_equal_to_eval_over_pdf() {
                     valid += 1;
                     assert!(s.pdf >= f64::MIN_POSITIVE && s.pdf.to_bits() == phase.pdf(wi, s.wo).to_bits(), "wi {wi}, u0 {u0}: {s:?}");
                     let eval = phase.eval(wi, s.wo);
-                    for c in 0..3 {
-                        assert!(relative(s.weight[c], eval[c] / s.pdf) < 1e-12, "wi {wi}, u {u0} {u1} {u2}: weight {:?}, eval/pdf {}", s.weight, eval[c] / s.pdf);
+                    for (w, e) in s.weight.iter().zip(eval) {
+                        assert!(relative(*w, e / s.pdf) < 1e-12, "wi {wi}, u {u0} {u1} {u2}: weight {:?}, eval/pdf {}", s.weight, e / s.pdf);
                     }
                 }
             }

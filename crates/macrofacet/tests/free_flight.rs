@@ -37,6 +37,8 @@ fn media() -> Vec<(&'static str, MacrofacetMedium)> {
 }
 
 /// (start SDF in units of σ, propagation direction): up, down, grazing, horizontal, from above.
+// 1.5707963 is the grazing direction, deliberately just short of the horizontal π/2 next to it.
+#[allow(clippy::approx_constant)]
 fn segments() -> Vec<(f64, DVec3)> {
     vec![
         (0.0, spherical(0.3, 0.2)),
@@ -121,7 +123,7 @@ fn free_flight_inverts_the_optical_depth_exactly() {
             for u in [1e-12, 0.1, 0.5, 0.9, 0.999_999] {
                 if let FreeFlight::Scatter { t } = m.sample_free_flight(f0, d, f64::INFINITY, u) {
                     let tau = m.optical_depth(f0, d, t);
-                    let target = -(-u as f64).ln_1p();
+                    let target = -(-u).ln_1p();
                     // Exact up to the resolution of t itself: a few ulps of t times σ_t there
                     // (a flight that starts above the shell cannot resolve 1e-13 past its entry).
                     let resolution = 4.0 * f64::EPSILON * t * m.sigma_t(f0 + t * d.z, d);

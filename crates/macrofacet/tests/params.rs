@@ -4,6 +4,9 @@
 use macrofacet::ndf::{MicrofacetDistribution, Ndf};
 use macrofacet::{medium_from_params, ErrorKind, MicroBsdf, ParamSet, VndfSampling};
 
+/// A parameter set that must be rejected: its entries, the error kind, and what the message names.
+type RejectedCase = (&'static [(&'static str, &'static str)], ErrorKind, &'static str);
+
 fn params(entries: &[(&str, &str)]) -> ParamSet {
     let mut p = ParamSet::new();
     for (name, value) in entries {
@@ -58,7 +61,7 @@ fn defaults_and_presets() {
 
 #[test]
 fn bad_parameters_are_errors_naming_the_parameter() {
-    let cases: &[(&[(&str, &str)], ErrorKind, &str)] = &[
+    let cases: &[RejectedCase] = &[
         (&[("alpha", "0.3")], ErrorKind::MissingParameter, "sigma"),
         (&[("sigma", "-1"), ("alpha", "0.3")], ErrorKind::InvalidValue, "sigma"),
         (&[("sigma", "NaN"), ("alpha", "0.3")], ErrorKind::InvalidValue, "sigma"),
@@ -150,7 +153,7 @@ impl TapGamma for ParamSet {
 
 #[test]
 fn gtr_and_transform_errors_name_the_parameter() {
-    let cases: &[(&[(&str, &str)], ErrorKind, &str)] = &[
+    let cases: &[RejectedCase] = &[
         (&[("sigma", "0.1"), ("distribution", "gtr"), ("alpha", "0.3")], ErrorKind::MissingParameter, "\"gamma\""),
         (&[("sigma", "0.1"), ("distribution", "gtr"), ("alpha", "0.3"), ("gamma", "0")], ErrorKind::InvalidValue, "\"gamma\""),
         (&[("sigma", "0.1"), ("distribution", "gtr"), ("alpha", "0.3"), ("gamma", "4.01")], ErrorKind::InvalidValue, "\"gamma\""),

@@ -117,9 +117,9 @@ fn sampled_weight_and_pdf_equal_eval() {
                 let cos = wi.dot((wi + s.wo).normalize());
                 let tol = 1e-9 + 1e-15 / (cos * cos);
                 assert!((s.pdf - pdf).abs() <= tol * pdf, "{name}: sample pdf {} vs pdf() {pdf}", s.pdf);
-                for c in 0..3 {
-                    let expected = value[c] / pdf;
-                    assert!((s.weight[c] - expected).abs() <= tol * expected.max(1e-12), "{name}: weight {:?} vs eval/pdf {expected}", s.weight);
+                for (w, v) in s.weight.iter().zip(value) {
+                    let expected = v / pdf;
+                    assert!((w - expected).abs() <= tol * expected.max(1e-12), "{name}: weight {:?} vs eval/pdf {expected}", s.weight);
                 }
             }
         }

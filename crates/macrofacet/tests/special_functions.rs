@@ -137,7 +137,8 @@ fn matches_mpmath_references() {
 
 #[test]
 fn nan_in_nan_out() {
-    let fs: [(&str, fn(f64) -> f64); 9] = [
+    type NamedFunction = (&'static str, fn(f64) -> f64);
+    let fs: [NamedFunction; 9] = [
         ("erf", erf),
         ("erfc", erfc),
         ("erfcx", erfcx),

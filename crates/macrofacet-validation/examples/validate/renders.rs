@@ -183,7 +183,9 @@ pub fn run(ctx: &Ctx) -> Section {
         let _ = writeln!(md, "{}", md_table(&["scene", "comparison", "time: macrofacet vs gpis", "MSE: macrofacet vs gpis", "result"], &derived));
     }
     // Bias floor: does the MSE of a medium fall like 1/spp across its rows?
-    let mut groups: BTreeMap<(String, String), Vec<(f64, f64, Option<f64>)>> = BTreeMap::new();
+    // (spp, MSE, reference noise) of the rows, by (scene, medium).
+    type MseBySpp = BTreeMap<(String, String), Vec<(f64, f64, Option<f64>)>>;
+    let mut groups: MseBySpp = BTreeMap::new();
     for r in &rows {
         if let Ok(spp) = r.spp.parse::<f64>() {
             groups.entry((r.scene.clone(), r.medium.to_ascii_lowercase())).or_default().push((spp, r.mse, r.ref_noise));
@@ -236,8 +238,11 @@ pub fn run(ctx: &Ctx) -> Section {
     Section { title, markdown: md, summary: vec![("5. Renders, mfrender macrofacet vs gpis (measured input)".into(), headline, "—".into())], seconds: 0.0 }
 }
 
+/// Each scene's patches, scenes in file order.
+type PatchesByScene = Vec<(String, Vec<Patch>)>;
+
 /// Reads `render_patches.tsv` (if any) into patches by scene, in file order.
-fn read_patches(text: &str) -> Result<(Vec<(String, Vec<Patch>)>, Vec<usize>), String> {
+fn read_patches(text: &str) -> Result<(PatchesByScene, Vec<usize>), String> {
     let tsv = Tsv::parse(text, &PATCH_COLUMNS)?;
     let mut scenes: Vec<(String, Vec<Patch>)> = Vec::new();
     let mut bad = Vec::new();

@@ -74,6 +74,14 @@ const SHORT_PIECE: f64 = 0.25;
 /// 0.75, 1 and 1.5, 0.75 rendered the thin torus anchor with the fewest instructions (368.8,
 /// 366.5, 364.7, 366.0 and 367.7 M).
 const RISING_THROUGH_ZONE: f64 = 0.75;
+/// Nor one that ends deeper than this many tolerances below the surface (4σ: σ): a free flight
+/// from the top face of a default shell has collided before `f = −σ` with probability 0.84 at
+/// normal incidence (more on slanted rays, whose optical depth per unit of `f` is larger), and the
+/// zone's bound (~1.8k instructions) would mostly go unused; the few flights that go on start a
+/// segment at the piece's end. Against going on at any depth, the thin torus anchor rendered
+/// with 1.4 % fewer instructions at 1/4 (1.2 % at 0, 1.4 % at 1/8, 1.3 % at 3/8, 0.9 % at 1/2),
+/// the default scene (160×90, 2 spp) with 0.1 % fewer.
+const DEEP_THROUGH_ZONE: f64 = 0.25;
 /// The far bound's reach beyond `|f|`, in tolerances (4σ: 3σ). Since the far bound took over
 /// from the general one above and within the shell, against 1/2 (2σ), 3/4 rendered the
 /// default scene (160×90, 2 spp) with 0.6 % fewer instructions and 1 with 0.7 % fewer; the
@@ -580,8 +588,9 @@ impl TriangleMesh {
         };
         cache.candidates.clear();
         // (Not for a piece that rises beyond RISING_THROUGH_ZONE of the tolerance: the ray is
-        // then mostly leaving the shell, and the tracker would not use the rest.)
-        if piece < length && (plane[1] <= RISING_THROUGH_ZONE * tolerance || tri.n.dot(d) <= 0.0) {
+        // then mostly leaving the shell, and the tracker would not use the rest. Nor for one
+        // that ends below DEEP_THROUGH_ZONE of it: a flight has then mostly collided.)
+        if piece < length && (plane[1] <= RISING_THROUGH_ZONE * tolerance || tri.n.dot(d) <= 0.0) && !(plane[1] < -DEEP_THROUGH_ZONE * tolerance) {
             if let Some((merged, pair, end_closest)) = self.through_zone(i, p, d, length, &bound, &end) {
                 cache.candidates.extend_from_slice(&pair);
                 cache.certified = false;

@@ -15,7 +15,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 MF_SETUP_FUZZ=1 "$root/scripts/setup.sh"
 build=$root/build/fuzz
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 \
-    -DCMAKE_CXX_COMPILER=clang++-14 -DMFHOST_FUZZ=ON >/dev/null
+    -DCMAKE_CXX_COMPILER=clang++-14 -DMFHOST_FUZZ=ON -DMF_PGO=OFF >/dev/null  # (the reader needs no profile-guided library)
 cmake --build "$build" -j "$(nproc)" --target fuzz_scene >/dev/null
 mkdir -p "$build/corpus" "$build/artifacts"
 log=$build/fuzz_scene.log

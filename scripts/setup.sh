@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what building and testing macrofacet needs on Debian 12, only what is missing:
-# the Debian packages of the C/C++ side and the pinned cbindgen. Safe to run repeatedly.
+# the Debian packages of the C/C++ side, the pinned cbindgen, and the toolchain's llvm-tools
+# (llvm-profdata, for the profile-guided release build: CMake's MF_PGO). Safe to run repeatedly.
 # Optional extras, only when asked:
 #   MF_SETUP_FUZZ=1     clang-14 + libclang-rt-14-dev (libFuzzer: scripts/fuzz_scene.sh; scripts/test.sh
 #                       asks for them unless MF_SETUP_FUZZ=0)
@@ -37,6 +38,19 @@ fi
 if ! cbindgen --version 2>/dev/null | grep -qx "cbindgen $CBINDGEN_VERSION"; then
     echo "setup: installing cbindgen $CBINDGEN_VERSION" >&2
     cargo install --locked --quiet cbindgen --version "$CBINDGEN_VERSION"
+fi
+
+# llvm-profdata of rustc's own LLVM (rustup's llvm-tools component, the active toolchain's
+# version): without it CMake builds the library without profile guidance, and says so.
+sysroot=$(rustc --print sysroot)
+host=$(rustc -vV | sed -n 's/^host: //p')
+if [ ! -x "$sysroot/lib/rustlib/$host/bin/llvm-profdata" ]; then
+    if command -v rustup >/dev/null 2>&1; then
+        echo "setup: installing the Rust toolchain's llvm-tools (rustup component)" >&2
+        rustup component add llvm-tools >/dev/null 2>&1 || echo "setup: rustup could not add llvm-tools: the library builds without profile guidance" >&2
+    else
+        echo "setup: no rustup to add llvm-tools: the library builds without profile guidance" >&2
+    fi
 fi
 
 if [ "${MF_SETUP_MITSUBA:-0}" = 1 ]; then

@@ -1,0 +1,216 @@
+//! The training run of the profile-guided release build (`MF_PGO`, cmake/CargoBuild.cmake): what
+//! a host's path tracer asks of the C ABI, per path, through the macrofacet media that cost the
+//! most. It prints one line per medium and nothing else; its output is the profile the compiler
+//! reads (LLVM's instrumentation: `-Cprofile-generate`), not a figure.
+//!
+//! Each path enters a shell at its enclosure (the offset of the surface by the exit level, as
+//! mfrender's region boundaries), and at every collision does what mfrender's integrator does:
+//! next-event estimation (the phase value toward a light direction, then a shadow ray's
+//! transmittance to the exit, from the collision with its hint), a phase sample, and the escape
+//! flight along it (to the exit, with the hint) — until a flight leaves the shell.
+//!
+//! The scenes are not the benchmarks' (bench/anchor.xml): a sphere of radius 2 and a torus mesh
+//! of 48 × 20 quads with vertex normals, each as a thin, an in-between and a volume-like shell.
+//! Usage: `cargo run --release -p macrofacet-ffi --example pgo_training [paths]` (default 6,000
+//! per medium).
+
+use glam::DVec3;
+use macrofacet_ffi::*;
+use std::ffi::CString;
+use std::ptr;
+
+fn check(status: mf_status, what: &str) {
+    if status != mf_status::MF_OK {
+        let mut message = vec![0u8; 512];
+        // SAFETY: the buffer is valid for its length.
+        unsafe { mf_last_error_message(message.as_mut_ptr().cast(), message.len(), ptr::null_mut()) };
+        let end = message.iter().position(|&b| b == 0).unwrap_or(message.len());
+        panic!("pgo_training: {what}: {}", String::from_utf8_lossy(&message[..end]));
+    }
+}
+
+/// splitmix64: the training's random numbers (and the tracking calls' seeds).
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// A uniform direction.
+    fn direction(&mut self) -> DVec3 {
+        let (z, phi) = (1.0 - 2.0 * self.next_f64(), std::f64::consts::TAU * self.next_f64());
+        let s = (1.0 - z * z).max(0.0).sqrt();
+        DVec3::new(s * phi.cos(), s * phi.sin(), z)
+    }
+}
+
+fn medium(sigma: f64, distribution: &str, alpha: f64) -> *mut mf_medium {
+    let mut params = ptr::null_mut();
+    let mut medium = ptr::null_mut();
+    // SAFETY: valid pointers and NUL-terminated strings throughout.
+    unsafe {
+        check(mf_params_new(&mut params), "mf_params_new");
+        let set_string = |name: &str, value: &str| {
+            let (name, value) = (CString::new(name).unwrap(), CString::new(value).unwrap());
+            check(mf_params_set_string(params, name.as_ptr(), value.as_ptr()), "mf_params_set_string");
+        };
+        let set_float = |name: &str, value: f64| {
+            let name = CString::new(name).unwrap();
+            check(mf_params_set_float(params, name.as_ptr(), value), "mf_params_set_float");
+        };
+        set_float("sigma", sigma);
+        set_string("distribution", distribution);
+        set_float("alpha", alpha);
+        set_string("material", "Au");
+        check(mf_medium_new(params, &mut medium), "mf_medium_new");
+        mf_params_free(params);
+    }
+    medium
+}
+
+/// A torus of `u × v` quads (major radius `big`, minor `small`) about `z`, with its vertex
+/// normals: positions, triangle indices, normals.
+fn torus(big: f64, small: f64, u: u32, v: u32) -> (Vec<f64>, Vec<u32>, Vec<f64>) {
+    let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..u {
+        let a = std::f64::consts::TAU * f64::from(i) / f64::from(u);
+        for j in 0..v {
+            let b = std::f64::consts::TAU * f64::from(j) / f64::from(v);
+            let n = DVec3::new(a.cos() * b.cos(), a.sin() * b.cos(), b.sin());
+            let p = DVec3::new(big * a.cos(), big * a.sin(), 0.0) + small * n;
+            positions.extend_from_slice(&[p.x, p.y, p.z]);
+            normals.extend_from_slice(&[n.x, n.y, n.z]);
+        }
+    }
+    let at = |i: u32, j: u32| (i % u) * v + (j % v);
+    for i in 0..u {
+        for j in 0..v {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            indices.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    (positions, indices, normals)
+}
+
+/// A point on the surface's enclosure and a direction into the shell: an entering ray.
+type Entry<'a> = dyn Fn(&mut Rng) -> (DVec3, DVec3) + 'a;
+
+/// One medium around one surface: `paths` paths entering at `entry`, with the tracking calls'
+/// exit level `exit_level`. Returns the collisions, to print.
+fn train(medium: *const mf_medium, surface: *const mf_surface, exit_level: f64, entry: &Entry<'_>, paths: u32, rng: &mut Rng) -> u64 {
+    let mut collisions = 0;
+    for _ in 0..paths {
+        let (mut origin, mut d) = entry(rng);
+        let mut hint = 0;
+        for _depth in 0..16 {
+            let query = mf_track_query { origin: origin.into(), d: d.into(), t_max: f64::INFINITY, seed: rng.next_u64(), exit_level, survival: 0.0, hint };
+            // SAFETY: all-zero is a valid mf_collision (its bool is false).
+            let mut c: mf_collision = unsafe { std::mem::zeroed() };
+            // SAFETY: valid handles and pointers; a built-in surface takes no user data.
+            unsafe { check(mf_track_free_flight(medium, surface, ptr::null(), ptr::null_mut(), &query, &mut c), "mf_track_free_flight") };
+            if !c.scattered {
+                break;
+            }
+            collisions += 1;
+            let p = DVec3::from(c.p);
+            let wi = -d;
+            // Next-event estimation toward a uniform direction: the phase value, then the shadow
+            // ray's transmittance where it is not zero.
+            let light = rng.direction();
+            // The collision's local parameters, NULL where the medium's own (as a host passes them).
+            let local: *const mf_local_params = if c.local.set == 0 { ptr::null() } else { &c.local };
+            // SAFETY: as above, for every call of the collision.
+            unsafe {
+                let mut value: mf_phase_value = std::mem::zeroed();
+                check(mf_phase_eval_pdf_local(medium, local, &c.frame, wi.into(), light.into(), &mut value), "mf_phase_eval_pdf_local");
+                if value.value.r > 0.0 || value.value.g > 0.0 || value.value.b > 0.0 {
+                    let shadow = mf_track_query { origin: c.p, d: light.into(), t_max: f64::INFINITY, seed: rng.next_u64(), exit_level, survival: 0.0, hint: c.hint };
+                    let mut t: mf_transmittance = std::mem::zeroed();
+                    check(mf_track_transmittance(medium, surface, ptr::null(), ptr::null_mut(), &shadow, &mut t), "mf_track_transmittance");
+                }
+                let u: [f64; MF_PHASE_SAMPLE_DIMENSIONS] = std::array::from_fn(|_| rng.next_f64());
+                let mut sample: mf_phase_sample_result = std::mem::zeroed();
+                check(mf_phase_sample_local(medium, local, &c.frame, wi.into(), u.as_ptr(), &mut sample), "mf_phase_sample_local");
+                if !sample.valid {
+                    break;
+                }
+                (origin, d, hint) = (p, DVec3::from(sample.wo), c.hint);
+            }
+        }
+    }
+    collisions
+}
+
+fn main() {
+    let paths: u32 = std::env::args().nth(1).map_or(6_000, |a| a.parse().expect("paths: a count"));
+    let mut rng = Rng(0x7067_6f5f_7472_6169);
+    let media = [("thin", 2e-3, "beckmann", 0.3), ("in-between", 0.03, "ggx", 0.4), ("volume-like", 0.08, "beckmann", 0.8)];
+
+    // A sphere of radius 2 at the origin; its region reaches the exit level.
+    let mut sphere = ptr::null_mut();
+    // SAFETY: valid out pointer.
+    unsafe { check(mf_surface_new_sphere(DVec3::ZERO.into(), 2.0, false, DVec3::Z.into(), &mut sphere), "mf_surface_new_sphere") };
+    // A torus mesh with vertex normals, and its own enclosure's exit level per medium.
+    let (positions, indices, normals) = torus(1.2, 0.5, 48, 20);
+    let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: normals.as_ptr(), uvs: ptr::null() };
+    let mut torus_surface = ptr::null_mut();
+    // SAFETY: the arrays outlive the call, which copies them.
+    unsafe { check(mf_surface_new_mesh(&mesh, 1, &mut torus_surface), "mf_surface_new_mesh") };
+
+    for (label, sigma, distribution, alpha) in media {
+        let m = medium(sigma, distribution, alpha);
+        let mut top = 0.0;
+        // SAFETY: valid handle and out pointer.
+        unsafe { check(mf_medium_shell_top(m, &mut top), "mf_medium_shell_top") };
+
+        // The sphere: rays from just inside the exit level, into the shell.
+        let exit_level = top * (1.0 + 1e-3);
+        let sphere_entry = move |rng: &mut Rng| {
+            let n = rng.direction();
+            let inward = (-n + 0.9 * rng.direction()).normalize_or(-n);
+            (n * (2.0 + top * (1.0 + 5e-4)), if inward.dot(n) < 0.0 { inward } else { -inward })
+        };
+        let on_sphere = train(m, sphere, exit_level, &sphere_entry, paths, &mut rng);
+
+        // The torus: rays from its enclosure's exit level above a random point of a random
+        // triangle, into the shell.
+        let mut enclosure = ptr::null_mut();
+        let mut torus_exit = 0.0;
+        // SAFETY: valid handles and out pointers.
+        unsafe {
+            check(mf_surface_enclosure(torus_surface, ptr::null_mut(), top, 0.0, &mut enclosure), "mf_surface_enclosure");
+            check(mf_enclosure_exit_level(enclosure, &mut torus_exit), "mf_enclosure_exit_level");
+            mf_enclosure_free(enclosure);
+        }
+        let corner = |k: u32| DVec3::new(positions[3 * k as usize], positions[3 * k as usize + 1], positions[3 * k as usize + 2]);
+        let torus_entry = |rng: &mut Rng| {
+            let t = ((rng.next_f64() * (indices.len() / 3) as f64) as usize).min(indices.len() / 3 - 1);
+            let [a, b, c] = [0, 1, 2].map(|k| corner(indices[3 * t + k]));
+            let (mut s, mut r) = (rng.next_f64(), rng.next_f64());
+            if s + r > 1.0 {
+                (s, r) = (1.0 - s, 1.0 - r);
+            }
+            let n = (b - a).cross(c - a).normalize();
+            let inward = (-n + 0.9 * rng.direction()).normalize_or(-n);
+            (a + s * (b - a) + r * (c - a) + n * (top * (1.0 + 5e-4)), if inward.dot(n) < 0.0 { inward } else { -inward })
+        };
+        let on_torus = train(m, torus_surface, torus_exit, &torus_entry, paths, &mut rng);
+        println!("{label} (sigma {sigma}, {distribution} alpha {alpha}): {on_sphere} collisions on the sphere, {on_torus} on the torus");
+        // SAFETY: a handle made above, freed once.
+        unsafe { mf_medium_free(m) };
+    }
+    // SAFETY: handles made above, freed once.
+    unsafe {
+        mf_surface_free(sphere);
+        mf_surface_free(torus_surface);
+    }
+}

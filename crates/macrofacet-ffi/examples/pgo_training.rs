@@ -9,14 +9,17 @@
 //! transmittance to the exit, from the collision with its hint), a phase sample, and the escape
 //! flight along it (to the exit, with the hint) — until a flight leaves the shell.
 //!
-//! The scenes are not the benchmarks' (bench/anchor.xml): a sphere of radius 2 and a torus mesh
-//! of 48 × 20 quads with vertex normals, each as a thin, an in-between and a volume-like shell.
+//! The scenes are not the benchmarks' (bench/anchor.xml, bench/gpis_compare.xml): a sphere of
+//! radius 2 and a torus mesh of 48 × 20 quads with vertex normals, each as a thin, an in-between
+//! and a volume-like shell; and the realization-based reference (`mf_gpis_trace`, the crossings'
+//! reflections) around the sphere, as mfrender's `gpis` medium calls it, so that the profile
+//! does not leave it cold.
 //! Usage: `cargo run --release -p macrofacet-ffi --example pgo_training [paths]` (default 6,000
-//! per medium).
+//! per medium; a tenth of that for the realizations, each ~50 times as costly).
 
 use glam::DVec3;
 use macrofacet_ffi::*;
-use std::ffi::CString;
+use std::ffi::{c_void, CString};
 use std::ptr;
 
 fn check(status: mf_status, what: &str) {
@@ -53,9 +56,9 @@ impl Rng {
     }
 }
 
-fn medium(sigma: f64, distribution: &str, alpha: f64) -> *mut mf_medium {
+/// The parameters of a gold medium (for `mf_medium_new` and `mf_gpis_new` alike).
+fn params(sigma: f64, distribution: &str, alpha: f64) -> *mut mf_params {
     let mut params = ptr::null_mut();
-    let mut medium = ptr::null_mut();
     // SAFETY: valid pointers and NUL-terminated strings throughout.
     unsafe {
         check(mf_params_new(&mut params), "mf_params_new");
@@ -71,10 +74,69 @@ fn medium(sigma: f64, distribution: &str, alpha: f64) -> *mut mf_medium {
         set_string("distribution", distribution);
         set_float("alpha", alpha);
         set_string("material", "Au");
+    }
+    params
+}
+
+fn medium(sigma: f64, distribution: &str, alpha: f64) -> *mut mf_medium {
+    let (params, mut medium) = (params(sigma, distribution, alpha), ptr::null_mut());
+    // SAFETY: a valid parameter set, freed once.
+    unsafe {
         check(mf_medium_new(params, &mut medium), "mf_medium_new");
         mf_params_free(params);
     }
     medium
+}
+
+/// The mean surface's signed distance for `mf_gpis_trace`: `user_data` is the `mf_surface`.
+unsafe extern "C" fn mean_sdf(user_data: *mut c_void, p: mf_vec3, out: *mut mf_sdf_sample) {
+    // SAFETY: all-zero is a valid mf_surface_point; the handle and `out` are valid (the caller's).
+    unsafe {
+        let mut point: mf_surface_point = std::mem::zeroed();
+        let ok = mf_surface_eval(user_data as *const mf_surface, ptr::null_mut(), p, &mut point) == mf_status::MF_OK;
+        *out = mf_sdf_sample { f: if ok { point.f } else { f64::NAN }, gradient: point.normal, u: point.u, v: point.v };
+    }
+}
+
+/// Paths through realizations of a GPIS around the sphere of radius 2 (`surface`): from outside
+/// its envelope toward it, each crossing reflected (`mf_gpis_scatter`) and traced on from there,
+/// as far as the ball that holds the envelope. Returns the crossings, to print.
+fn train_gpis(gpis: *const mf_gpis, surface: *mut mf_surface, paths: u32, rng: &mut Rng) -> u64 {
+    let mut envelope = 0.0;
+    // SAFETY: valid handle and out pointer.
+    unsafe { check(mf_gpis_envelope(gpis, ptr::null(), &mut envelope), "mf_gpis_envelope") };
+    let reach = 2.0 + envelope;
+    // The distance from `o` (inside the ball) along `d` to the ball's boundary.
+    let exit = |o: DVec3, d: DVec3| {
+        let b = o.dot(d);
+        -b + (b * b - (o.length_squared() - reach * reach)).max(0.0).sqrt()
+    };
+    let mut crossings = 0;
+    for _ in 0..paths {
+        let n = rng.direction();
+        let inward = (-n + 0.9 * rng.direction()).normalize_or(-n);
+        let (mut origin, mut d) = (n * reach * (1.0 - 1e-9), if inward.dot(n) < 0.0 { inward } else { -inward });
+        let mut start = mf_gpis_start { kind: MF_GPIS_START_FREE, gradient: DVec3::ZERO.into() };
+        for _depth in 0..8 {
+            // SAFETY: all-zero is a valid mf_gpis_hit; valid handles, callback and pointers.
+            let mut hit: mf_gpis_hit = unsafe { std::mem::zeroed() };
+            unsafe { check(mf_gpis_trace(gpis, Some(mean_sdf), ptr::null(), surface.cast(), origin.into(), d.into(), exit(origin, d), &start, rng.next_u64(), &mut hit), "mf_gpis_trace") };
+            if !hit.hit {
+                break;
+            }
+            crossings += 1;
+            let local: *const mf_local_params = if hit.local.set == 0 { ptr::null() } else { &hit.local };
+            // SAFETY: as above.
+            let mut sample: mf_phase_sample_result = unsafe { std::mem::zeroed() };
+            unsafe { check(mf_gpis_scatter(gpis, local, (-d).into(), hit.normal, &mut sample), "mf_gpis_scatter") };
+            if !sample.valid {
+                break;
+            }
+            (origin, d) = (DVec3::from(hit.point), DVec3::from(sample.wo));
+            start = mf_gpis_start { kind: MF_GPIS_START_ON_SURFACE, gradient: hit.gradient };
+        }
+    }
+    crossings
 }
 
 /// A torus of `u × v` quads (major radius `big`, minor `small`) about `z`, with its vertex
@@ -208,6 +270,21 @@ fn main() {
         // SAFETY: a handle made above, freed once.
         unsafe { mf_medium_free(m) };
     }
+    // The realization-based reference around the sphere: the in-between GPSS of the paper's
+    // Figs. 17/18 (σ = 0.02 of the radius), and a rougher, wider one.
+    for (sigma, alpha) in [(0.04, 0.4), (0.1, 1.0)] {
+        let (params, mut gpis) = (params(sigma, "gpss", alpha), ptr::null_mut());
+        // SAFETY: a valid parameter set, freed once.
+        unsafe {
+            check(mf_gpis_new(params, &mut gpis), "mf_gpis_new");
+            mf_params_free(params);
+        }
+        let crossings = train_gpis(gpis, sphere, paths / 10, &mut rng);
+        println!("gpis (sigma {sigma}, gpss alpha {alpha}): {crossings} crossings on the sphere");
+        // SAFETY: a handle made above, freed once.
+        unsafe { mf_gpis_free(gpis) };
+    }
+
     // SAFETY: handles made above, freed once.
     unsafe {
         mf_surface_free(sphere);

@@ -10,10 +10,11 @@
 //! flight along it (to the exit, with the hint) — until a flight leaves the shell.
 //!
 //! The scenes are not the benchmarks' (bench/anchor.xml, bench/gpis_compare.xml): a sphere of
-//! radius 2 and a torus mesh of 48 × 20 quads with vertex normals, each as a thin, an in-between
-//! and a volume-like shell; and the realization-based reference (`mf_gpis_trace`, the crossings'
-//! reflections) around the sphere, as mfrender's `gpis` medium calls it, so that the profile
-//! does not leave it cold.
+//! radius 2 and a torus mesh of 48 × 20 quads with vertex normals, each as thin, in-between and
+//! volume-like shells of each distribution family, diffuse flakes and the mixture sampler; and
+//! the realization-based reference (`mf_gpis_trace`, the crossings' reflections) around the
+//! sphere, as mfrender's `gpis` medium calls it. What the training leaves out, the compiler
+//! treats as cold: each kind of medium a host renders should have its share.
 //! Usage: `cargo run --release -p macrofacet-ffi --example pgo_training [paths]` (default 6,000
 //! per medium; a tenth of that for the realizations, each ~50 times as costly).
 
@@ -56,30 +57,38 @@ impl Rng {
     }
 }
 
-/// The parameters of a gold medium (for `mf_medium_new` and `mf_gpis_new` alike).
-fn params(sigma: f64, distribution: &str, alpha: f64) -> *mut mf_params {
+/// A parameter's value (`mf_params_set_float` or `_string`).
+#[derive(Clone, Copy)]
+enum Value {
+    Float(f64),
+    Text(&'static str),
+}
+
+/// A shell of the training: its label, its share of the paths (in tenths) and its parameters.
+type Shell = (&'static str, u32, Vec<(&'static str, Value)>);
+
+/// The parameters of a medium (for `mf_medium_new` and `mf_gpis_new` alike).
+fn params(named: &[(&str, Value)]) -> *mut mf_params {
     let mut params = ptr::null_mut();
     // SAFETY: valid pointers and NUL-terminated strings throughout.
     unsafe {
         check(mf_params_new(&mut params), "mf_params_new");
-        let set_string = |name: &str, value: &str| {
-            let (name, value) = (CString::new(name).unwrap(), CString::new(value).unwrap());
-            check(mf_params_set_string(params, name.as_ptr(), value.as_ptr()), "mf_params_set_string");
-        };
-        let set_float = |name: &str, value: f64| {
+        for &(name, value) in named {
             let name = CString::new(name).unwrap();
-            check(mf_params_set_float(params, name.as_ptr(), value), "mf_params_set_float");
-        };
-        set_float("sigma", sigma);
-        set_string("distribution", distribution);
-        set_float("alpha", alpha);
-        set_string("material", "Au");
+            match value {
+                Value::Float(x) => check(mf_params_set_float(params, name.as_ptr(), x), "mf_params_set_float"),
+                Value::Text(text) => {
+                    let text = CString::new(text).unwrap();
+                    check(mf_params_set_string(params, name.as_ptr(), text.as_ptr()), "mf_params_set_string");
+                }
+            }
+        }
     }
     params
 }
 
-fn medium(sigma: f64, distribution: &str, alpha: f64) -> *mut mf_medium {
-    let (params, mut medium) = (params(sigma, distribution, alpha), ptr::null_mut());
+fn medium(named: &[(&str, Value)]) -> *mut mf_medium {
+    let (params, mut medium) = (params(named), ptr::null_mut());
     // SAFETY: a valid parameter set, freed once.
     unsafe {
         check(mf_medium_new(params, &mut medium), "mf_medium_new");
@@ -215,7 +224,20 @@ fn train(medium: *const mf_medium, surface: *const mf_surface, exit_level: f64, 
 fn main() {
     let paths: u32 = std::env::args().nth(1).map_or(6_000, |a| a.parse().expect("paths: a count"));
     let mut rng = Rng(0x7067_6f5f_7472_6169);
-    let media = [("thin", 2e-3, "beckmann", 0.3), ("in-between", 0.03, "ggx", 0.4), ("volume-like", 0.08, "beckmann", 0.8)];
+    use Value::{Float, Text};
+    let gold = ("material", Text("Au"));
+    // The shells, each with its share of the paths: conductor flakes of each distribution family
+    // (the thin and in-between ones most: they are what renders cost most), then diffuse flakes
+    // and the mixture sampler.
+    let media: [Shell; 7] = [
+        ("thin beckmann", 10, vec![("sigma", Float(2e-3)), ("distribution", Text("beckmann")), ("alpha", Float(0.3)), gold]),
+        ("in-between ggx", 10, vec![("sigma", Float(0.03)), ("distribution", Text("ggx")), ("alpha", Float(0.4)), gold]),
+        ("volume-like beckmann", 10, vec![("sigma", Float(0.08)), ("distribution", Text("beckmann")), ("alpha", Float(0.8)), gold]),
+        ("in-between anisotropic gpss", 5, vec![("sigma", Float(0.03)), ("distribution", Text("gpss")), ("alpha_u", Float(0.3)), ("alpha_v", Float(0.6)), ("alpha_z", Float(0.2)), gold]),
+        ("thin gtr", 3, vec![("sigma", Float(2e-3)), ("distribution", Text("gtr")), ("gamma", Float(1.5)), ("alpha", Float(0.3)), gold]),
+        ("thin diffuse flakes", 2, vec![("sigma", Float(2e-3)), ("distribution", Text("beckmann")), ("alpha", Float(0.5)), ("micro_bsdf", Text("diffuse"))]),
+        ("in-between mixture", 3, vec![("sigma", Float(0.03)), ("distribution", Text("gpss")), ("alpha", Float(0.6)), ("vndf_sampling", Text("mixture")), gold]),
+    ];
 
     // A sphere of radius 2 at the origin; its region reaches the exit level.
     let mut sphere = ptr::null_mut();
@@ -228,8 +250,9 @@ fn main() {
     // SAFETY: the arrays outlive the call, which copies them.
     unsafe { check(mf_surface_new_mesh(&mesh, 1, &mut torus_surface), "mf_surface_new_mesh") };
 
-    for (label, sigma, distribution, alpha) in media {
-        let m = medium(sigma, distribution, alpha);
+    for (label, tenths, named) in &media {
+        let m = medium(named);
+        let paths = paths * tenths / 10;
         let mut top = 0.0;
         // SAFETY: valid handle and out pointer.
         unsafe { check(mf_medium_shell_top(m, &mut top), "mf_medium_shell_top") };
@@ -266,14 +289,14 @@ fn main() {
             (a + s * (b - a) + r * (c - a) + n * (top * (1.0 + 5e-4)), if inward.dot(n) < 0.0 { inward } else { -inward })
         };
         let on_torus = train(m, torus_surface, torus_exit, &torus_entry, paths, &mut rng);
-        println!("{label} (sigma {sigma}, {distribution} alpha {alpha}): {on_sphere} collisions on the sphere, {on_torus} on the torus");
+        println!("{label}: {on_sphere} collisions on the sphere, {on_torus} on the torus");
         // SAFETY: a handle made above, freed once.
         unsafe { mf_medium_free(m) };
     }
     // The realization-based reference around the sphere: the in-between GPSS of the paper's
     // Figs. 17/18 (σ = 0.02 of the radius), and a rougher, wider one.
     for (sigma, alpha) in [(0.04, 0.4), (0.1, 1.0)] {
-        let (params, mut gpis) = (params(sigma, "gpss", alpha), ptr::null_mut());
+        let (params, mut gpis) = (params(&[("sigma", Float(sigma)), ("distribution", Text("gpss")), ("alpha", Float(alpha)), gold]), ptr::null_mut());
         // SAFETY: a valid parameter set, freed once.
         unsafe {
             check(mf_gpis_new(params, &mut gpis), "mf_gpis_new");

@@ -19,6 +19,7 @@
 //! per medium; a tenth of that for the realizations, each ~50 times as costly).
 
 use glam::DVec3;
+use macrofacet::rng::Pcg32;
 use macrofacet_ffi::*;
 use std::ffi::{c_void, CString};
 use std::ptr;
@@ -33,20 +34,16 @@ fn check(status: mf_status, what: &str) {
     }
 }
 
-/// splitmix64: the training's random numbers (and the tracking calls' seeds).
-struct Rng(u64);
+/// The training's random numbers (and the tracking calls' seeds): the library's own generator.
+struct Rng(Pcg32);
 
 impl Rng {
     fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        (u64::from(self.0.next_u32()) << 32) | u64::from(self.0.next_u32())
     }
 
     fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        self.0.next_f64()
     }
 
     /// A uniform direction.
@@ -149,7 +146,9 @@ fn train_gpis(gpis: *const mf_gpis, surface: *mut mf_surface, paths: u32, rng: &
 }
 
 /// A torus of `u × v` quads (major radius `big`, minor `small`) about `z`, with its vertex
-/// normals: positions, triangle indices, normals.
+/// normals: positions, triangle indices, normals. (The validation crate's `meshes::torus` in the
+/// C ABI's flat arrays; that crate is not a dependency here: its plotting would lengthen every
+/// profile-guided build.)
 fn torus(big: f64, small: f64, u: u32, v: u32) -> (Vec<f64>, Vec<u32>, Vec<f64>) {
     let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..u {
@@ -223,7 +222,7 @@ fn train(medium: *const mf_medium, surface: *const mf_surface, exit_level: f64, 
 
 fn main() {
     let paths: u32 = std::env::args().nth(1).map_or(6_000, |a| a.parse().expect("paths: a count"));
-    let mut rng = Rng(0x7067_6f5f_7472_6169);
+    let mut rng = Rng(Pcg32::new(0x7067_6f5f_7472_6169, 1));
     use Value::{Float, Text};
     let gold = ("material", Text("Au"));
     // The shells, each with its share of the paths: conductor flakes of each distribution family

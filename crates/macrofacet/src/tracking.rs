@@ -36,6 +36,7 @@ use crate::ordered::{largest_magnitude, less, more};
 use crate::rng::Pcg32;
 use crate::surface::{MeanSurface, SegmentBound, SegmentEnd, SurfacePoint};
 use glam::DVec3;
+use std::ops::ControlFlow;
 
 /// The PCG32 stream ("mftrack") of the C ABI's tracking calls: `mf_track_*` with `seed` equals
 /// [`Tracker::with_bounds`] (with [`ProjectedAreaBounds::of`] the medium, built with its handle)
@@ -943,31 +944,33 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
         Ok((t, ray_point(seg.p, seg.bound.length, d)?))
     }
 
-    /// Whether the call ends at `t`, the end of `seg` (passed), before the surface point there is
-    /// computed; if so, the distance it reports. Only where the segment's end is known (counted as
-    /// the query it saves), by the checks the loop's top would make first: the ray past the
-    /// clipped interval, or (`EXITS`) above the exit level. A thin shell's calls mostly end so,
-    /// within their first segment.
+    /// Where a call goes once `seg` ended without a collision: `Break` with the distance it
+    /// reports where it ends there (passed: the ray past the clipped interval, or (`EXITS`) above
+    /// the exit level), known from the end's `f` before the surface point there is computed (a
+    /// thin shell's calls mostly end so, within their first segment); else `Continue` with where
+    /// the next segment starts: its distance, position and surface point (the bound's end point,
+    /// the surface's from what the bound left in the cache, or a fresh query).
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn ends_after<const EXITS: bool>(seg: &Segment, t: f64, t_max: f64, t_exit: f64, exit_level: f64, stats: &mut TrackStats) -> Option<f64> {
-        let f = seg.bound.end.f()?;
-        stats.surface_queries += 1;
-        if !(t < t_exit) {
-            return Some(ended::<EXITS>(t_max, t_exit));
+    fn after_segment<const EXITS: bool>(&self, seg: &Segment, origin: DVec3, d: DVec3, t_max: f64, t_exit: f64, exit_level: f64, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<ControlFlow<f64, (f64, DVec3, SurfacePoint)>> {
+        let (t, p) = self.advance(seg, origin, d)?;
+        if let Some(f) = seg.bound.end.f() {
+            // (Counted as the query a known end saves.)
+            stats.surface_queries += 1;
+            if !(t < t_exit) {
+                return Ok(ControlFlow::Break(ended::<EXITS>(t_max, t_exit)));
+            }
+            if EXITS && f > exit_level {
+                return Ok(ControlFlow::Break(t));
+            }
         }
-        (EXITS && f > exit_level).then_some(t)
-    }
-
-    /// The surface at `p`, the end of `seg`, where the next segment starts: the bound's end point,
-    /// the surface's from what the bound left in the cache, or a fresh query.
-    #[inline(always)]
-    fn start_after(&self, seg: &Segment, p: DVec3, cache: &mut S::Cache, stats: &mut TrackStats) -> Result<SurfacePoint> {
-        match seg.bound.end {
-            // Validated with its bound (`next_segment`), counted in `ends_after`.
-            SegmentEnd::Point(end) => Ok(end),
-            SegmentEnd::Height(_) => self.surface.end_point(p, cache)?.validated(p),
-            SegmentEnd::Unknown => self.checked(self.surface.start_point(p, cache), p, stats),
-        }
+        let start = match seg.bound.end {
+            // Validated with its bound (`next_segment`).
+            SegmentEnd::Point(end) => end,
+            SegmentEnd::Height(_) => self.surface.end_point(p, cache)?.validated(p)?,
+            SegmentEnd::Unknown => self.checked(self.surface.start_point(p, cache), p, stats)?,
+        };
+        Ok(ControlFlow::Continue((t, p, start)))
     }
 
     /// Samples a free flight along `origin + t d`, `t ∈ [0, t_max]` (`t_max` may be `+∞`), by
@@ -1071,11 +1074,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                 None => {
                     segments += 1;
                     previous = self.previous(&seg, tentative);
-                    let (t, p) = self.advance(&seg, origin, d)?;
-                    if let Some(t_end) = Self::ends_after::<EXITS>(&seg, t, t_max, t_exit, exit_level, stats) {
-                        return Ok((TrackedFlight::Pass, t_end));
+                    match self.after_segment::<EXITS>(&seg, origin, d, t_max, t_exit, exit_level, &mut cache, stats)? {
+                        ControlFlow::Break(t_end) => return Ok((TrackedFlight::Pass, t_end)),
+                        ControlFlow::Continue(next) => next,
                     }
-                    (t, p, self.start_after(&seg, p, &mut cache, stats)?)
                 }
             };
         }
@@ -1179,11 +1181,10 @@ impl<'a, S: MeanSurface, F: MediumField> Tracker<'a, S, F> {
                     }
                     segments += 1;
                     previous = self.previous(&seg, tentative);
-                    let (t, p) = self.advance(&seg, origin, d)?;
-                    if let Some(t_end) = Self::ends_after::<EXITS>(&seg, t, t_max, t_exit, exit_level, stats) {
-                        return Ok((transmittance, t_end));
+                    match self.after_segment::<EXITS>(&seg, origin, d, t_max, t_exit, exit_level, &mut cache, stats)? {
+                        ControlFlow::Break(t_end) => return Ok((transmittance, t_end)),
+                        ControlFlow::Continue(next) => next,
                     }
-                    (t, p, self.start_after(&seg, p, &mut cache, stats)?)
                 }
             };
         }

@@ -52,6 +52,16 @@ impl Rng {
         let s = (1.0 - z * z).max(0.0).sqrt();
         DVec3::new(s * phi.cos(), s * phi.sin(), z)
     }
+
+    /// A direction into a surface whose outward normal is `n`, spread about `−n`.
+    fn inward(&mut self, n: DVec3) -> DVec3 {
+        let d = (-n + 0.9 * self.direction()).normalize_or(-n);
+        if d.dot(n) < 0.0 {
+            d
+        } else {
+            -d
+        }
+    }
 }
 
 /// A parameter's value (`mf_params_set_float` or `_string`).
@@ -120,8 +130,7 @@ fn train_gpis(gpis: *const mf_gpis, surface: *mut mf_surface, paths: u32, rng: &
     let mut crossings = 0;
     for _ in 0..paths {
         let n = rng.direction();
-        let inward = (-n + 0.9 * rng.direction()).normalize_or(-n);
-        let (mut origin, mut d) = (n * reach * (1.0 - 1e-9), if inward.dot(n) < 0.0 { inward } else { -inward });
+        let (mut origin, mut d) = (n * reach * (1.0 - 1e-9), rng.inward(n));
         let mut start = mf_gpis_start { kind: MF_GPIS_START_FREE, gradient: DVec3::ZERO.into() };
         for _depth in 0..8 {
             // SAFETY: all-zero is a valid mf_gpis_hit; valid handles, callback and pointers.
@@ -260,8 +269,7 @@ fn main() {
         let exit_level = top * (1.0 + 1e-3);
         let sphere_entry = move |rng: &mut Rng| {
             let n = rng.direction();
-            let inward = (-n + 0.9 * rng.direction()).normalize_or(-n);
-            (n * (2.0 + top * (1.0 + 5e-4)), if inward.dot(n) < 0.0 { inward } else { -inward })
+            (n * (2.0 + top * (1.0 + 5e-4)), rng.inward(n))
         };
         let on_sphere = train(m, sphere, exit_level, &sphere_entry, paths, &mut rng);
 
@@ -284,8 +292,7 @@ fn main() {
                 (s, r) = (1.0 - s, 1.0 - r);
             }
             let n = (b - a).cross(c - a).normalize();
-            let inward = (-n + 0.9 * rng.direction()).normalize_or(-n);
-            (a + s * (b - a) + r * (c - a) + n * (top * (1.0 + 5e-4)), if inward.dot(n) < 0.0 { inward } else { -inward })
+            (a + s * (b - a) + r * (c - a) + n * (top * (1.0 + 5e-4)), rng.inward(n))
         };
         let on_torus = train(m, torus_surface, torus_exit, &torus_entry, paths, &mut rng);
         println!("{label}: {on_sphere} collisions on the sphere, {on_torus} on the torus");

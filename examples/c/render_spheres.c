@@ -141,8 +141,10 @@ static int next_boundary(vec3 o, vec3 d, double *t, int *which, int *entering) {
   return isfinite(*t);
 }
 
-/* The transmittance from o along d to infinity through every region it crosses. */
-static double shadow(vec3 o, vec3 d, int inside, rng *r) {
+/* The transmittance from o along d to infinity through every region it crosses. `hint`: the
+   mf_collision::hint of the collision at o, for the first segment (a mesh surface's first query
+   starts at the collision's triangle; 0 from this example's callback spheres, and safe always). */
+static double shadow(vec3 o, vec3 d, int inside, uint64_t hint, rng *r) {
   double T = 1.0;
   for (int bounce = 0; bounce < 16 && T > 0; ++bounce) {
     double t;
@@ -150,7 +152,7 @@ static double shadow(vec3 o, vec3 d, int inside, rng *r) {
     int hit = next_boundary(o, d, &t, &which, &entering);
     if (inside >= 0) {
       object *obj = &g_objects[inside];
-      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0, 0};
+      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0, hint};
       mf_transmittance tr;
       check(mf_track_transmittance(obj->medium, obj->surface, NULL, &obj->shape, &q, &tr), "mf_track_transmittance");
       T *= tr.transmittance;
@@ -158,6 +160,7 @@ static double shadow(vec3 o, vec3 d, int inside, rng *r) {
     if (!hit) break;
     o = add(o, mul(d, t));
     inside = entering ? which : -1;
+    hint = 0; /* past a boundary the ray no longer starts at the collision */
   }
   return T;
 }
@@ -172,6 +175,7 @@ static double mis(double a, double b) { return a * a / (a * a + b * b); }
 static double radiance(vec3 o, vec3 d, rng *r, double rgb[3]) {
   double beta[3] = {1, 1, 1}, L = 0;
   int inside = -1;
+  uint64_t hint = 0;   /* the last collision's mf_collision::hint while the ray starts there */
   double prev_pdf = 0; /* 0: the camera (no MIS) */
   rgb[0] = rgb[1] = rgb[2] = 0;
   for (int depth = 0; depth < 32; ++depth) {
@@ -180,7 +184,7 @@ static double radiance(vec3 o, vec3 d, rng *r, double rgb[3]) {
     int hit = next_boundary(o, d, &t, &which, &entering);
     if (inside >= 0) {
       object *obj = &g_objects[inside];
-      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0, 0};
+      mf_track_query q = {to_mf(o), to_mf(d), hit ? t : INFINITY, next_u64(r), 0, 0, hint};
       mf_collision c;
       check(mf_track_free_flight(obj->medium, obj->surface, NULL, &obj->shape, &q, &c), "mf_track_free_flight");
       if (c.scattered) {
@@ -193,7 +197,7 @@ static double radiance(vec3 o, vec3 d, rng *r, double rgb[3]) {
         check(mf_phase_eval_pdf(obj->medium, &c.frame, wi, to_mf(l), &pv), "mf_phase_eval_pdf");
         double light_pdf = 1 / (4 * PI);
         if (pv.pdf > 0 || pv.value.r > 0) {
-          double w = mis(light_pdf, pv.pdf) * sky(l) * shadow(p, l, inside, r) / light_pdf;
+          double w = mis(light_pdf, pv.pdf) * sky(l) * shadow(p, l, inside, c.hint, r) / light_pdf;
           rgb[0] += beta[0] * pv.value.r * w, rgb[1] += beta[1] * pv.value.g * w, rgb[2] += beta[2] * pv.value.b * w;
         }
         /* Continue by sampling the phase function. */
@@ -205,6 +209,7 @@ static double radiance(vec3 o, vec3 d, rng *r, double rgb[3]) {
         beta[0] *= ps.weight.r, beta[1] *= ps.weight.g, beta[2] *= ps.weight.b;
         o = p;
         d = from_mf(ps.wo);
+        hint = c.hint; /* the escape flight starts at the collision */
         prev_pdf = ps.pdf;
         continue;
       }
@@ -217,6 +222,7 @@ static double radiance(vec3 o, vec3 d, rng *r, double rgb[3]) {
     /* An index-matched boundary: the ray goes straight on into or out of the region. */
     o = add(o, mul(d, t));
     inside = entering ? which : -1;
+    hint = 0;
   }
   L = (rgb[0] + rgb[1] + rgb[2]) / 3;
   return L;

@@ -18,6 +18,9 @@
 //! Usage: `cargo run --release -p macrofacet-ffi --example pgo_training [paths]` (default 6,000
 //! per medium; a tenth of that for the realizations, each ~50 times as costly).
 
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 use glam::DVec3;
 use macrofacet::rng::Pcg32;
 use macrofacet_ffi::*;
@@ -26,11 +29,7 @@ use std::ptr;
 
 fn check(status: mf_status, what: &str) {
     if status != mf_status::MF_OK {
-        let mut message = vec![0u8; 512];
-        // SAFETY: the buffer is valid for its length.
-        unsafe { mf_last_error_message(message.as_mut_ptr().cast(), message.len(), ptr::null_mut()) };
-        let end = message.iter().position(|&b| b == 0).unwrap_or(message.len());
-        panic!("pgo_training: {what}: {}", String::from_utf8_lossy(&message[..end]));
+        panic!("pgo_training: {what}: {}", common::last_error());
     }
 }
 

@@ -1123,15 +1123,23 @@ enum mf_status mf_surface_new_sphere(struct mf_vec3 center,
  * construction may use, the calling one among them (0 or 1: the calling thread only; at most
  * [`MF_MAX_BUILD_THREADS`]), and the surface's enclosures ([`mf_surface_enclosure`]) later
  * use as many. The surface is the same whatever the count; the threads end before the call
- * returns. Building costs 30 to 50 µs of one core per triangle. Refused with the reason: a
- * mesh that is not closed, non-finite or out-of-range data, vertices beyond ±1e50, a mesh
- * narrower than 1e-50 (lengths outside the range of `sigma`), too many threads.
+ * returns. `reach` is the largest distance from the mesh at which the media using the surface
+ * will be tracked: a macrofacet medium's shell top (`mf_medium_shell_top`; the largest of
+ * several media's), `INFINITY` when unknown. The surface builds its fast closed forms up to a
+ * few reaches from the mesh (a thin shell's surface builds in about 30 % less time) and
+ * searches beyond: its distances, gradients and frames do not depend on it (up to rounding),
+ * though a tracking call's segments may split differently, so that one seed may draw
+ * different, equally distributed, events. Building costs 30 to 50 µs of one core per triangle
+ * at no limit. Refused with the reason: a mesh that is not closed, non-finite or out-of-range
+ * data, vertices beyond ±1e50, a mesh narrower than 1e-50 (lengths outside the range of
+ * `sigma`), too many threads, a reach that is NaN, zero or negative.
  *
  * # Safety
  * `mesh` must be NULL or valid, its arrays valid for the sizes it states.
  */
 enum mf_status mf_surface_new_mesh(const struct mf_mesh *mesh,
                                    size_t threads,
+                                   double reach,
                                    struct mf_surface **out_surface);
 
 /**

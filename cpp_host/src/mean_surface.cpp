@@ -25,7 +25,7 @@ std::string library_error() {
 
 }  // namespace
 
-std::shared_ptr<const MeanSurface> MeanSurface::of(const Shape& shape, size_t threads) {
+std::shared_ptr<const MeanSurface> MeanSurface::of(const Shape& shape, size_t threads, double reach) {
     mf_surface* handle = nullptr;
     mf_status st = MF_OK;
     const auto* sphere = dynamic_cast<const SphereShape*>(&shape);
@@ -43,7 +43,7 @@ std::shared_ptr<const MeanSurface> MeanSurface::of(const Shape& shape, size_t th
         for (const Vec2& uv : m.uv) uvs.insert(uvs.end(), {uv.x, uv.y});
         mf_mesh desc{positions.data(), m.p.size(), m.idx.data(), m.num_triangles(), normals.empty() ? nullptr : normals.data(),
                      uvs.empty() ? nullptr : uvs.data()};
-        st = mf_surface_new_mesh(&desc, threads, &handle);
+        st = mf_surface_new_mesh(&desc, threads, reach, &handle);
     } else if (auto* sdf = dynamic_cast<const SdfGridShape*>(&shape)) {
         // The library takes object-unit values over the unit cube and a similarity to_world:
         // divide the world distances by its scale.

@@ -16,6 +16,7 @@
 // tracked over instead of a surface in the BVH: SuperposedMedium in scene.h.)
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <optional>
 
@@ -32,9 +33,10 @@ class Medium;
 class MeanSurface {
 public:
     /// The mean surface of `shape` (a sphere or a closed mesh), a mesh's built on up to `threads`
-    /// threads (mf_surface_new_mesh; its enclosures use as many); throws mf::Error at the shape's
-    /// location otherwise.
-    static std::shared_ptr<const MeanSurface> of(const Shape& shape, size_t threads = 1);
+    /// threads (mf_surface_new_mesh; its enclosures use as many) for media tracked up to `reach`
+    /// from it (a macrofacet medium's shell top; INFINITY: any medium); throws mf::Error at the
+    /// shape's location otherwise.
+    static std::shared_ptr<const MeanSurface> of(const Shape& shape, size_t threads = 1, double reach = INFINITY);
     ~MeanSurface();
     MeanSurface(const MeanSurface&) = delete;
     MeanSurface& operator=(const MeanSurface&) = delete;

@@ -253,7 +253,7 @@ double MacrofacetMedium::sigma_t_at(const Vec3& p, const Vec3& d, Vec3* normal, 
     return st;
 }
 
-std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> surface) {
+std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag& bag, const Shape& mean, size_t threads) {
     if (bag.type != "macrofacet") throw Error(bag.loc, "not a macrofacet medium");
     // Spatially varying parameters: the base medium takes each at its largest value (its sigma
     // is then the region's), the field gives the local ones (medium_field.h).
@@ -263,6 +263,10 @@ std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag&
     if (mf_medium_new(params.get(), &handle) != MF_OK) throw medium_param_error(base, mf_last_error());
     std::unique_ptr<mf_medium, void (*)(mf_medium*)> owned(handle, mf_medium_free);  // freed if the field throws
     std::shared_ptr<const LibraryField> field = library_field_of(bag);
+    // The surface is built for this medium's reach, its largest shell top (mf_surface_new_mesh).
+    double top = 0;
+    if (mf_medium_shell_top(handle, &top) != MF_OK) throw Error(bag.loc, mf_last_error());
+    auto surface = MeanSurface::of(mean, threads, top);
     return std::make_shared<MacrofacetMedium>(owned.release(), std::move(surface), medium_label(bag), std::move(field));
 }
 

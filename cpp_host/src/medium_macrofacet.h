@@ -118,9 +118,10 @@ private:
 /// when it ends; for tests).
 unsigned tally_slots_held();
 
-/// Builds the macrofacet medium of a mean surface from its parameter bag (mf_params_* /
-/// mf_medium_new), with its spatially varying parameters as a library field; throws mf::Error at
-/// the file:line of the offending parameter.
-std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag& bag, std::shared_ptr<const MeanSurface> surface);
+/// Builds the macrofacet medium of the shape `mean` from its parameter bag (mf_params_* /
+/// mf_medium_new), with its spatially varying parameters as a library field, and the mean surface
+/// for it (on up to `threads` threads, for the medium's reach: MeanSurface::of); throws mf::Error
+/// at the file:line of the offending parameter, or at the shape's.
+std::shared_ptr<MacrofacetMedium> create_macrofacet_medium(const MediumParamBag& bag, const Shape& mean, size_t threads);
 
 }  // namespace mf

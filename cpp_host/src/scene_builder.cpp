@@ -141,14 +141,14 @@ private:
 
     void build_region(PendingRegion& r, size_t threads) {
         try {
-            auto surface = MeanSurface::of(*r.shape, threads);
             if (r.gpis) {
+                auto surface = MeanSurface::of(*r.shape, threads);
                 auto g = create_gpis_medium(*r.bag, surface);
                 r.boundary = make_region_boundary(r.shape, *surface, g->envelope(), g);
                 r.medium = g;
             } else {
-                auto m = create_macrofacet_medium(*r.bag, surface);
-                r.boundary = make_region_boundary(r.shape, *surface, m->shell_top(), m);
+                auto m = create_macrofacet_medium(*r.bag, *r.shape, threads);
+                r.boundary = make_region_boundary(r.shape, m->surface(), m->shell_top(), m);
                 r.medium = m;
             }
         } catch (...) {
@@ -903,7 +903,7 @@ private:
             if (ms.type != "sphere" && ms.get_bool("flip_normals", false))  // as the plugin
                 throw perr(ms, "flip_normals", "is not allowed on a mesh mean surface (its triangles' winding defines the interior)");
             ms.check_all_used();  // the mean surface is geometry only
-            auto m = create_macrofacet_medium(*bag, MeanSurface::of(*mean, build_threads()));
+            auto m = create_macrofacet_medium(*bag, *mean, build_threads());
             scene_->media.push_back(m);
             it = boundary_media_.emplace(bag.get(), m).first;
         }

@@ -131,11 +131,18 @@ fn mesh(b: &mut Bytes, size: f64, center: DVec3, debug: bool) -> Option<(Surface
         normals: normals.as_ref().map_or(ptr::null(), |n| n.as_ptr()),
         uvs: uvs.as_ref().map_or(ptr::null(), |u| u.as_ptr()),
     };
+    // The reach: mostly none, else a thin shell's (about 1e-3 of the mesh's size) or any number
+    // (NaN, zero and negative ones are refused).
+    let reach = match b.u8() % 4 {
+        0 => size * 1e-3 * (1.0 + b.unit()),
+        1 if b.bool() => b.float(),
+        _ => f64::INFINITY,
+    };
     if debug {
-        eprintln!("mesh: positions {positions:?} indices {indices:?} normals {normals:?} uvs {uvs:?} {mesh:?}");
+        eprintln!("mesh: positions {positions:?} indices {indices:?} normals {normals:?} uvs {uvs:?} {mesh:?} reach {reach}");
     }
     // (One thread: the fuzzer's meshes are small, and the count does not change the surface.)
-    check::call(|o| unsafe { mf_surface_new_mesh(&mesh, 1, o) }).ok().map(|s| (Surface(s), exact))
+    check::call(|o| unsafe { mf_surface_new_mesh(&mesh, 1, reach, o) }).ok().map(|s| (Surface(s), exact))
 }
 
 /// A signed-distance grid of a sphere filling most of the unit cube, `n³` samples (n from 2),

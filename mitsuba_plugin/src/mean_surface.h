@@ -38,11 +38,12 @@ public:
 
     /// A closed triangle mesh in world space (see mf_mesh; the arrays are copied), built on one
     /// thread per core, at most the library's MF_MAX_BUILD_THREADS (mf_surface_new_mesh refuses
-    /// more; the same surface whatever the count), as mfrender's scene builder does.
-    static std::shared_ptr<const MeanSurface> mesh(const mf_mesh& mesh, const std::string& kind) {
+    /// more; the same surface whatever the count), for media tracked up to `reach` from it, as
+    /// mfrender's scene builder does.
+    static std::shared_ptr<const MeanSurface> mesh(const mf_mesh& mesh, const std::string& kind, double reach) {
         mf_surface* h = nullptr;
         const size_t threads = std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), MF_MAX_BUILD_THREADS);
-        check(mf_surface_new_mesh(&mesh, threads, &h), "not a valid mean surface");
+        check(mf_surface_new_mesh(&mesh, threads, reach, &h), "not a valid mean surface");
         return std::shared_ptr<const MeanSurface>(new MeanSurface(h, kind, mesh.uvs != nullptr, {}));
     }
 

@@ -99,12 +99,6 @@ public:
             if (!mean)
                 throw std::runtime_error(std::string("needs its mean surface: nest <shape type=\"sphere\" name=\"") +
                                          kMeanSurface + "\">, a mesh shape (obj, ply, ...) or an sdfgrid with name=\"" + kMeanSurface + "\"");
-            std::shared_ptr<const MeanSurface> surface;
-            try {
-                surface = mean_surface_of(mean);
-            } catch (const std::exception& e) {
-                throw std::runtime_error(std::string("<shape name=\"") + kMeanSurface + "\">: " + e.what());
-            }
             bool diffuse = false;
             if (props.has_property("micro_bsdf") && props.type("micro_bsdf") == Properties::Type::String) {
                 diffuse = props.get<std::string>("micro_bsdf") == "diffuse";
@@ -136,6 +130,13 @@ public:
             field.library = ::mf::library_field_of(bag);
             double top = 0;
             check(mf_medium_shell_top(medium, &top), "mf_medium_shell_top");
+            // the mean surface, built for this medium's reach (its largest shell top)
+            std::shared_ptr<const MeanSurface> surface;
+            try {
+                surface = mean_surface_of(mean, top);
+            } catch (const std::exception& e) {
+                throw std::runtime_error(std::string("<shape name=\"") + kMeanSurface + "\">: " + e.what());
+            }
             check_fields_on_surface(field.fields.get(), *surface, top);
             state_ = std::make_shared<const MediumState>(owned.release(), std::move(surface), std::move(field), diffuse, label,
                                                          mix64(std::hash<std::string>()(id)));

@@ -82,8 +82,10 @@ inline std::shared_ptr<const MeanSurface> grid_surface(const float* values, cons
     return MeanSurface::grid(desc, faces);
 }
 
+/// The mean surface of a Mitsuba shape, for media tracked up to `reach` from it (a macrofacet
+/// medium's shell top; mf_surface_new_mesh).
 template <typename Float, typename Spectrum>
-std::shared_ptr<const MeanSurface> mean_surface_of(mitsuba::Shape<Float, Spectrum>* shape) {
+std::shared_ptr<const MeanSurface> mean_surface_of(mitsuba::Shape<Float, Spectrum>* shape, double reach) {
     using namespace mitsuba;
     MI_IMPORT_TYPES()
     static_assert(!dr::is_jit_v<Float>, "scalar variants only");
@@ -128,7 +130,7 @@ std::shared_ptr<const MeanSurface> mean_surface_of(mitsuba::Shape<Float, Spectru
         if (!face_normals && normals_in && normals_in->size() == 3 * nv) normals.assign(normals_in->data(), normals_in->data() + 3 * nv);
         if (texcoords && texcoords->size() == 2 * nv) uvs.assign(texcoords->data(), texcoords->data() + 2 * nv);
         mf_mesh desc{vertices.data(), nv, faces->data(), nf, normals.empty() ? nullptr : normals.data(), uvs.empty() ? nullptr : uvs.data()};
-        return MeanSurface::mesh(desc, "mesh");
+        return MeanSurface::mesh(desc, "mesh", reach);
     }
 
     if (shape->shape_type() == +ShapeType::SDFGrid) {

@@ -1222,7 +1222,7 @@ static void test_opaque_core(void) {
   const double octa_p[18] = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
   const uint32_t octa_i[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
   mf_mesh octa = {octa_p, 6, octa_i, 8, NULL, NULL};
-  EXPECT_OK(mf_surface_new_mesh(&octa, 1, &mesh));
+  EXPECT_OK(mf_surface_new_mesh(&octa, 1, INFINITY, &mesh));
   double start = 1, core = 1;
   EXPECT_OK(mf_track_opaque_core(m, sphere, &start, &core));
   /* start at -8 sigma; the core about 40 sigma deep (kappa ~ 1 for a sphere's gradient frame) */
@@ -1293,7 +1293,7 @@ static void test_surfaces_and_tracking(void) {
   const double octa_p[18] = {2, 0, 0, -2, 0, 0, 0, 2, 0, 0, -2, 0, 0, 0, 2, 0, 0, -2};
   const uint32_t octa_i[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
   mf_mesh octa = {octa_p, 6, octa_i, 8, NULL, NULL};
-  EXPECT_OK(mf_surface_new_mesh(&octa, 1, &mesh));
+  EXPECT_OK(mf_surface_new_mesh(&octa, 1, INFINITY, &mesh));
 
   /* Point queries: the built-in and the host sphere agree; the octahedron's face distance. */
   host_sphere hs = {0, 0};
@@ -1500,13 +1500,16 @@ static void test_surfaces_and_tracking(void) {
   EXPECT_STATUS(mf_surface_new_callbacks(&bad_box, &s), MF_ERROR_INVALID_ARGUMENT, "bounds_min");
   const uint32_t open_i[3] = {0, 2, 4};
   mf_mesh open = {octa_p, 6, open_i, 1, NULL, NULL};
-  EXPECT_STATUS(mf_surface_new_mesh(&open, 1, &s), MF_ERROR_INVALID_ARGUMENT, "not closed");
+  EXPECT_STATUS(mf_surface_new_mesh(&open, 1, INFINITY, &s), MF_ERROR_INVALID_ARGUMENT, "not closed");
   const uint32_t bad_i[3] = {0, 2, 40};
   mf_mesh out_of_range = {octa_p, 6, bad_i, 1, NULL, NULL};
-  EXPECT_STATUS(mf_surface_new_mesh(&out_of_range, 1, &s), MF_ERROR_INVALID_ARGUMENT, "refers to vertex");
+  EXPECT_STATUS(mf_surface_new_mesh(&out_of_range, 1, INFINITY, &s), MF_ERROR_INVALID_ARGUMENT, "refers to vertex");
   mf_mesh no_positions = {NULL, 6, octa_i, 8, NULL, NULL};
-  EXPECT_STATUS(mf_surface_new_mesh(&no_positions, 1, &s), MF_ERROR_NULL_POINTER, "mesh->positions");
-  EXPECT_STATUS(mf_surface_new_mesh(&octa, MF_MAX_BUILD_THREADS + 1, &s), MF_ERROR_INVALID_ARGUMENT, "threads must be at most");
+  EXPECT_STATUS(mf_surface_new_mesh(&no_positions, 1, INFINITY, &s), MF_ERROR_NULL_POINTER, "mesh->positions");
+  EXPECT_STATUS(mf_surface_new_mesh(&octa, MF_MAX_BUILD_THREADS + 1, INFINITY, &s), MF_ERROR_INVALID_ARGUMENT, "threads must be at most");
+  EXPECT_STATUS(mf_surface_new_mesh(&octa, 1, NAN, &s), MF_ERROR_INVALID_ARGUMENT, "reach must be positive");
+  EXPECT_STATUS(mf_surface_new_mesh(&octa, 1, 0.0, &s), MF_ERROR_INVALID_ARGUMENT, "reach must be positive");
+  EXPECT_STATUS(mf_surface_new_mesh(&octa, 1, -1.0, &s), MF_ERROR_INVALID_ARGUMENT, "reach must be positive");
   CHECK(s == (mf_surface *)0x1, "a failed mf_surface_new_* wrote its out-parameter");
   EXPECT_STATUS(mf_surface_eval(sphere, NULL, v3(INFINITY, 0, 0), &a), MF_ERROR_INVALID_ARGUMENT, "p must be finite");
 

@@ -80,7 +80,7 @@ Surface make_surface() {
   const uint32_t idx[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
   const mf_mesh mesh = {p, 6, idx, 8, nullptr, nullptr};
   mf_surface *s = nullptr;
-  ok(mf_surface_new_mesh(&mesh, 2, &s), "mf_surface_new_mesh");
+  ok(mf_surface_new_mesh(&mesh, 2, INFINITY, &s), "mf_surface_new_mesh");
   return Surface(s);
 }
 

@@ -255,7 +255,7 @@ fn main() {
     let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: normals.as_ptr(), uvs: ptr::null() };
     let mut torus_surface = ptr::null_mut();
     // SAFETY: the arrays outlive the call, which copies them.
-    unsafe { check(mf_surface_new_mesh(&mesh, 1, &mut torus_surface), "mf_surface_new_mesh") };
+    unsafe { check(mf_surface_new_mesh(&mesh, 1, f64::INFINITY, &mut torus_surface), "mf_surface_new_mesh") };
 
     for (label, tenths, named) in &media {
         let m = medium(named);

@@ -473,13 +473,13 @@ fn tracking_calls_equal_the_core_bit_for_bit() {
     unsafe {
         assert_eq!(mf_surface_new_sphere(v(DVec3::new(0.1, -0.2, 0.3)), 0.9, false, v(pole), &mut sphere_h), mf_status::MF_OK);
         let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: 6, indices: indices.as_ptr(), triangle_count: 8, normals: positions.as_ptr(), uvs: ptr::null() };
-        assert_eq!(mf_surface_new_mesh(&mesh, 1, &mut mesh_h), mf_status::MF_OK);
+        assert_eq!(mf_surface_new_mesh(&mesh, 1, f64::INFINITY, &mut mesh_h), mf_status::MF_OK);
         assert_eq!(mf_surface_new_callbacks(&callbacks, &mut plane_h), mf_status::MF_OK);
     }
     let sphere = Sphere::new(DVec3::new(0.1, -0.2, 0.3), 0.9, false, pole).unwrap();
     let points: Vec<DVec3> = positions.chunks_exact(3).map(DVec3::from_slice).collect();
     let tris: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-    let octahedron = TriangleMesh::new(&points, &tris, Some(&points), None, 1).unwrap();
+    let octahedron = TriangleMesh::new(&points, &tris, Some(&points), None, 1, f64::INFINITY).unwrap();
 
     fn compare<S: MeanSurface>(name: &str, handle: *const mf_surface, medium: *const mf_medium, core: &MacrofacetMedium, surface: &S, rng: &mut Rng) {
         // The medium's handle holds its bounds built once, with their cells.

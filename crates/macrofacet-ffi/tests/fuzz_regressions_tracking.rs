@@ -27,7 +27,7 @@ fn new_mesh(positions: &[f64], indices: &[u32], normals: Option<&[f64]>, uvs: Op
     let or_null = |v: Option<&[f64]>| v.map_or(ptr::null(), <[f64]>::as_ptr);
     let mesh = mf_mesh { positions: positions.as_ptr(), vertex_count: positions.len() / 3, indices: indices.as_ptr(), triangle_count: indices.len() / 3, normals: or_null(normals), uvs: or_null(uvs) };
     let mut surface = ptr::null_mut();
-    let status = unsafe { mf_surface_new_mesh(&mesh, 1, &mut surface) };
+    let status = unsafe { mf_surface_new_mesh(&mesh, 1, f64::INFINITY, &mut surface) };
     (status, surface)
 }
 

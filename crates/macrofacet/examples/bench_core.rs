@@ -188,7 +188,7 @@ fn tracking_benchmarks(filter: &str) {
     // enclosure cell (1/128 of the extent, times sqrt 3) above the shell, as in mfrender.
     let t = meshes::torus(0.5, 0.2, 64, 24);
     let start = Instant::now();
-    let torus = TriangleMesh::new(&t.positions, &t.indices, t.normals.as_deref(), None, 1).unwrap();
+    let torus = TriangleMesh::new(&t.positions, &t.indices, t.normals.as_deref(), None, 1, f64::INFINITY).unwrap();
     let built = start.elapsed().as_secs_f64();
     let start = Instant::now();
     let boundary = macrofacet::surface::enclosure(&torus, 0.006, 0.0).unwrap();
@@ -223,7 +223,7 @@ fn tracking_benchmarks(filter: &str) {
 #[allow(dead_code)]
 fn bench_closest() {
     let t = meshes::torus(0.5, 0.2, 64, 24);
-    let torus = TriangleMesh::new(&t.positions, &t.indices, t.normals.as_deref(), None, 1).unwrap();
+    let torus = TriangleMesh::new(&t.positions, &t.indices, t.normals.as_deref(), None, 1, f64::INFINITY).unwrap();
     let mut rng = Pcg32::new(4, 4);
     let pts: Vec<DVec3> = (0..N)
         .map(|_| {

@@ -26,7 +26,13 @@ fn medium(ndf: Ndf, sigma: f64) -> MacrofacetMedium {
 }
 
 fn mesh_surface(m: &Mesh) -> TriangleMesh {
-    TriangleMesh::new(&m.positions, &m.indices, m.normals.as_deref(), None::<&[DVec2]>, 1).unwrap()
+    mesh_surface_within(m, f64::INFINITY)
+}
+
+/// The surface built for media tracked up to `reach` from it (its closed forms stop a few reaches
+/// out).
+fn mesh_surface_within(m: &Mesh, reach: f64) -> TriangleMesh {
+    TriangleMesh::new(&m.positions, &m.indices, m.normals.as_deref(), None::<&[DVec2]>, 1, reach).unwrap()
 }
 
 /// `τ(t)` along a ray by Gauss–Legendre panels of `σ/20`, tabulated at the panel edges up to
@@ -316,18 +322,21 @@ fn meshes_with_sharp_and_reflex_edges_and_a_smooth_torus() {
 fn thin_shell_across_the_edges_of_a_torus_mesh() {
     // A thin shell (σ well below the edges' zones, `surface/mesh/edge.rs`) on a smooth torus,
     // with its vertex normals and flat: segments that cross an edge where no face region
-    // certifies them take the dihedral bound of the edge's two triangles.
+    // certifies them take the dihedral bound of the edge's two triangles. And the smooth torus
+    // built for this shell's reach (its top, 3σ), whose certified heights and grid stop 12σ out.
     let m = medium(Ndf::Gpss(Gpss::new(0.3, 0.3, 0.15).unwrap()), 0.002);
     let mesh = meshes::torus(1.0, 0.4, 32, 16);
     let smooth = mesh_surface(&mesh);
+    let within_reach = mesh_surface_within(&mesh, m.height.top());
     let flat = mesh_surface(&Mesh { normals: None, ..mesh });
     let cases = vec![
         ray("oblique", DVec3::new(-2.0, -2.0, 2.0), DVec3::new(1.0, 0.3, 0.0), 6.0),
         ray("grazing_top", DVec3::new(-3.0, 0.05, 0.4), DVec3::new(3.0, 0.05, 0.4), 7.0),
         ray("inner_rim", DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.6, 0.0, 0.0), 3.0),
     ];
-    for (k, (name, surface)) in [("smooth torus", &smooth), ("flat torus", &flat)].into_iter().enumerate() {
-        let (failures, stats) = check_surface(name, &m, surface, &cases, 2000, sidak_alpha(0.01, 6 * cases.len()), 53 + k as u64);
+    let surfaces = [("smooth torus", &smooth), ("flat torus", &flat), ("smooth torus within the shell's reach", &within_reach)];
+    for (k, (name, surface)) in surfaces.into_iter().enumerate() {
+        let (failures, stats) = check_surface(name, &m, surface, &cases, 2000, sidak_alpha(0.01, 9 * cases.len()), 53 + k as u64);
         assert_eq!(stats.majorant_violations, 0, "{name}: majorant violated");
         assert_eq!(failures, 0);
     }
@@ -446,16 +455,18 @@ fn mesh_distance_matches_brute_force_and_bounds_hold() {
     // The hierarchy's closest point equals the minimum over all triangles; along random short
     // segments near the surface, f and d·n stay within the segment bounds: for a thin shell's
     // tolerance and for a thick one's, where certified pieces shorter than a quarter of it
-    // give way to the far bound.
+    // give way to the far bound; and on a surface built for a thin shell's reach (its closed
+    // forms stop 0.012 out), at both tolerances and far from it.
     for (name, mesh) in [("torus", meshes::torus(1.0, 0.4, 24, 12)), ("l_prism", meshes::l_prism()), ("sphere", meshes::uv_sphere(1.0, 12, 24)), ("lumpy torus", meshes::lumpy_torus(1.0, 0.4, 32, 16, 0.15))] {
         let surface = mesh_surface(&mesh);
+        let within_reach = mesh_surface_within(&mesh, 0.003);
         let flat = mesh_surface(&Mesh { normals: None, ..mesh });
         let mut rng = Pcg32::new(3, 4);
         let mut cache = Default::default();
         for _ in 0..3000 {
             let p = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 3.0 - DVec3::splat(1.0);
             let d = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize();
-            for (s, tolerance) in [(&surface, 0.01), (&flat, 0.01), (&surface, 0.4), (&flat, 0.4)] {
+            for (s, tolerance) in [(&surface, 0.01), (&flat, 0.01), (&surface, 0.4), (&flat, 0.4), (&within_reach, 0.01), (&within_reach, 0.4)] {
                 let start = s.point(p).unwrap();
                 let length = 0.3 * rng.next_f64() + 1e-3;
                 let b = s.bound(&start, p, d, length, tolerance, &mut cache).unwrap();
@@ -520,6 +531,9 @@ fn mesh_distance_is_exact_near_the_surface() {
             }
         }
         let surface = mesh_surface(&mesh);
+        // Built for media tracked up to 0.005 from it: its certified heights and grid stop at
+        // 0.02, within the points' heights here.
+        let within_reach = mesh_surface_within(&mesh, 0.005);
         let mut rng = Pcg32::new(11, 5);
         let scale = 0.05;
         for _ in 0..4000 {
@@ -533,6 +547,8 @@ fn mesh_distance_is_exact_near_the_surface() {
             let f = surface.point(p).unwrap().f;
             let brute = mesh.indices.iter().map(|t| brute_triangle_distance(p, t.map(|i| mesh.positions[i as usize]))).fold(f64::INFINITY, f64::min);
             assert!((f.abs() - brute).abs() <= 1e-9, "{name}: |f({p})| = {} but the nearest triangle is at {brute}", f.abs());
+            let f_within = within_reach.point(p).unwrap().f;
+            assert!((f_within - f).abs() <= 1e-12 * (1.0 + f.abs()), "{name}: f({p}) = {f}, but {f_within} on the surface built for a reach of 0.005");
             if brute > 1e-6 {
                 let d = DVec3::new(0.5377, 0.8131, 0.2231).normalize();
                 let inside = crossings(&mesh.positions, &mesh.indices, p, d) % 2 == 1;
@@ -924,8 +940,8 @@ fn surface_points_carry_mitsuba_uv() {
     let octa: Vec<DVec3> = [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z].into();
     let tris = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
     let uvs: Vec<DVec2> = (0..6).map(|i| DVec2::new(0.1 * i as f64, 1.0 - 0.15 * i as f64)).collect();
-    let with_uv = TriangleMesh::new(&octa, &tris, None, Some(&uvs), 1).unwrap();
-    let without = TriangleMesh::new(&octa, &tris, None, None, 1).unwrap();
+    let with_uv = TriangleMesh::new(&octa, &tris, None, Some(&uvs), 1, f64::INFINITY).unwrap();
+    let without = TriangleMesh::new(&octa, &tris, None, None, 1, f64::INFINITY).unwrap();
     // Above the centroid of face (0, 2, 4): barycentrics 1/3 each.
     let p = (DVec3::X + DVec3::Y + DVec3::Z) / 3.0 * 1.2;
     let expect = (uvs[0] + uvs[2] + uvs[4]) / 3.0;
@@ -1234,6 +1250,7 @@ fn an_opaque_core_is_opaque() {
         None,
         None::<&[DVec2]>,
         1,
+        f64::INFINITY,
     )
     .unwrap();
     let media = core_media();

@@ -11,6 +11,7 @@ its C ABI (ctypes on the package's libmacrofacet.so); the mesh is loaded by Mits
 mesh format Mitsuba reads works, with Mitsuba's vertex merging.
 """
 import ctypes
+import math
 import os
 import struct
 
@@ -33,7 +34,7 @@ def _library():
         path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib", "libmacrofacet.so")
         lib = ctypes.CDLL(path)
         vp = ctypes.c_void_p
-        lib.mf_surface_new_mesh.argtypes = [ctypes.POINTER(_Mesh), ctypes.c_size_t, ctypes.POINTER(vp)]
+        lib.mf_surface_new_mesh.argtypes = [ctypes.POINTER(_Mesh), ctypes.c_size_t, ctypes.c_double, ctypes.POINTER(vp)]
         lib.mf_surface_enclosure.argtypes = [vp, vp, ctypes.c_double, ctypes.c_double, ctypes.POINTER(vp)]
         lib.mf_enclosure_mesh.argtypes = [vp, ctypes.POINTER(_Mesh)]
         lib.mf_enclosure_free.argtypes = [vp]
@@ -68,7 +69,9 @@ def enclosure(positions, faces, level, cell_size=0.0):
     # One per core, at most the library's MF_MAX_BUILD_THREADS (1024; more is refused); the same
     # surface whatever the count.
     threads = min(os.cpu_count() or 1, 1024)
-    _check(lib.mf_surface_new_mesh(ctypes.byref(desc), threads, ctypes.byref(surface)), "the mesh is not a valid mean surface")
+    # The surface serves this enclosure only: built for any medium (no reach, infinity).
+    _check(lib.mf_surface_new_mesh(ctypes.byref(desc), threads, math.inf, ctypes.byref(surface)),
+           "the mesh is not a valid mean surface")
     try:
         _check(lib.mf_surface_enclosure(surface, None, float(level), float(cell_size), ctypes.byref(enc)),
                "mf_surface_enclosure")

@@ -14,7 +14,8 @@ use crate::parallel;
 use glam::{DVec3, IVec3};
 
 /// Cells whose centre is farther than this many cells from the surface get no list (queries
-/// there use the hierarchy).
+/// there use the hierarchy), nor those farther than half a diagonal beyond the mesh's covered
+/// distance (every point within that distance of the mesh still lies in a cell with a list).
 const BAND_CELLS: f64 = 1.5;
 /// Fine cells per edge of the coarsest blocks of the build (a power of two: they halve down to
 /// cells where they meet the band).
@@ -42,9 +43,10 @@ pub(super) struct CellGrid {
 }
 
 impl CellGrid {
-    /// The grid over the mesh's bounds (`min`, `max`) with cells of about `cell`, on up to
-    /// `threads` threads (one block of the coarsest level at a time each).
-    pub fn build(bvh: &Bvh, triangles: &[Triangle], min: DVec3, max: DVec3, cell: f64, threads: usize) -> CellGrid {
+    /// The grid over the mesh's bounds (`min`, `max`) with cells of about `cell` and lists for
+    /// the points within `covered` of the mesh, on up to `threads` threads (one block of the
+    /// coarsest level at a time each).
+    pub fn build(bvh: &Bvh, triangles: &[Triangle], min: DVec3, max: DVec3, cell: f64, covered: f64, threads: usize) -> CellGrid {
         let extent = max - min;
         let mut h = cell.max((extent.x * extent.y * extent.z / MAX_CELLS).cbrt()).max(1e-12 * extent.max_element());
         // Blocks per axis with the band's padding; a flat mesh (no volume) of small triangles
@@ -53,12 +55,12 @@ impl CellGrid {
         while blocks_of(h).element_product() * f64::from(BLOCK.pow(3)) > 4.0 * MAX_CELLS {
             h *= 1.25;
         }
-        let band = BAND_CELLS * h;
-        let origin = min - DVec3::splat(band + h);
+        let half_diagonal = 0.5 * 3f64.sqrt() * h;
+        let band = (BAND_CELLS * h).min(half_diagonal + covered);
+        let origin = min - DVec3::splat(BAND_CELLS * h + h);
         let blocks = blocks_of(h).as_ivec3();
         let dims = blocks * BLOCK;
         let count = (dims.x as usize) * (dims.y as usize) * (dims.z as usize);
-        let half_diagonal = 0.5 * 3f64.sqrt() * h;
         let index = |c: IVec3| ((c.z * dims.y + c.y) * dims.x + c.x) as usize;
         let block_of = |b: usize| {
             let (x, y) = (b as i32 % blocks.x, b as i32 / blocks.x);

@@ -333,7 +333,7 @@ mod tests {
         let corners: Vec<DVec3> = (0..8).map(|i| DVec3::new([-1.0, 1.0][i & 1], [-1.0, 1.0][(i >> 1) & 1], [-1.0, 1.0][i >> 2])).collect();
         let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
         let triangles: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
-        let cube = TriangleMesh::new(&corners, &triangles, None, None, 1).unwrap();
+        let cube = TriangleMesh::new(&corners, &triangles, None, None, 1, f64::INFINITY).unwrap();
         for (scale, expected) in [(0.7, false), (1.3, true)] {
             let (vertices, _) = cube.welded_vertices();
             let offset: Vec<DVec3> = vertices.iter().map(|&v| v * scale).collect();
@@ -348,7 +348,7 @@ mod tests {
     fn offset_needs_blunt_vertices_and_a_positive_level() {
         let tetrahedron = |apex: f64| {
             let p = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(-0.5, 0.8660254, 0.0), DVec3::new(-0.5, -0.8660254, 0.0), DVec3::new(0.0, 0.0, apex)];
-            TriangleMesh::new(&p, &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], None, None, 1).unwrap()
+            TriangleMesh::new(&p, &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], None, None, 1, f64::INFINITY).unwrap()
         };
         let blunt = tetrahedron(1.0);
         let e = blunt.offset_enclosure(0.01).expect("a blunt tetrahedron offsets");

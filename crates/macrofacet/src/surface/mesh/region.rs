@@ -31,7 +31,8 @@ use glam::DVec3;
 const MARGINS: [f64; LEVELS] = [0.0, 1.0 / 128.0, 1.0 / 32.0, 1.0 / 8.0, 0.25, 0.5];
 const LEVELS: usize = 6;
 /// The certified heights stop at this many longest edges of the triangle (a shell that thick
-/// spans many triangles and takes the general bound anyway).
+/// spans many triangles and takes the general bound anyway), and at the mesh's covered distance
+/// (its reach, [`super::TriangleMesh::new`]).
 const HEIGHT_EDGES: f64 = 0.5;
 /// The uncertified strip beside an edge is taken as this many of the first margins of the
 /// triangle being left wide (its own, and its neighbour's of up to three times the inradius).
@@ -65,18 +66,18 @@ impl FaceRegion {
     /// Certifies nothing (no point is that far inside).
     const NONE: FaceRegion = FaceRegion { inward: [DVec3::ZERO; 3], offset: [0.0; 3], inverse_altitude: [0.0; 3], plane: 0.0, margin: [f64::INFINITY; LEVELS], height: [[0.0; LEVELS]; 2] };
 
-    /// The certified regions of every triangle (in the hierarchy's order), on up to `threads`
-    /// threads; `epsilon` is the rounding scale of the coordinates, taken off every certified
-    /// height.
-    pub fn build(bvh: &Bvh, triangles: &[Triangle], epsilon: f64, threads: usize) -> Vec<FaceRegion> {
+    /// The certified regions of every triangle (in the hierarchy's order), with heights up to
+    /// `covered` at most, on up to `threads` threads; `epsilon` is the rounding scale of the
+    /// coordinates, taken off every certified height.
+    pub fn build(bvh: &Bvh, triangles: &[Triangle], epsilon: f64, covered: f64, threads: usize) -> Vec<FaceRegion> {
         // Every triangle's cones at its corners, once (each serves all the neighbours there).
         let cones: Vec<[Option<Cone>; 3]> = triangles.iter().map(|t| t.p.map(|v| Cone::at(t, v))).collect();
-        parallel::map(triangles.len(), threads, || (Vec::new(), Vec::new()), |(near, by_gap), i| Self::of(bvh, triangles, &cones, i, epsilon, near, by_gap))
+        parallel::map(triangles.len(), threads, || (Vec::new(), Vec::new()), |(near, by_gap), i| Self::of(bvh, triangles, &cones, i, epsilon, covered, near, by_gap))
     }
 
     /// `near` and `by_gap`: scratch space, reused from triangle to triangle.
     #[allow(clippy::too_many_arguments)]
-    fn of(bvh: &Bvh, triangles: &[Triangle], cones: &[[Option<Cone>; 3]], i: usize, epsilon: f64, near: &mut Vec<u32>, by_gap: &mut Vec<(f64, u32)>) -> FaceRegion {
+    fn of(bvh: &Bvh, triangles: &[Triangle], cones: &[[Option<Cone>; 3]], i: usize, epsilon: f64, covered: f64, near: &mut Vec<u32>, by_gap: &mut Vec<(f64, u32)>) -> FaceRegion {
         let t = &triangles[i];
         let n = t.n;
         if n == DVec3::ZERO {
@@ -97,7 +98,7 @@ impl FaceRegion {
         // `1 − f` about it.
         let incentre = (lengths[1] * t.p[0] + lengths[2] * t.p[1] + lengths[0] * t.p[2]) / perimeter;
         let margin = MARGINS.map(|f| f * inradius);
-        let h_max = HEIGHT_EDGES * lengths.iter().copied().fold(0.0, f64::max);
+        let h_max = (HEIGHT_EDGES * lengths.iter().copied().fold(0.0, f64::max)).min(covered);
         // How far each inset's corner `k` lies from `T`'s: `f |p_k − incentre|`.
         let from_incentre = t.p.map(|c| (c - incentre).length());
 

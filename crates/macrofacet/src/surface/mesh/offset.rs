@@ -227,7 +227,9 @@ fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, threads: u
                     let v = corners[a][shared[0]];
                     let (a0, a1) = opposite(&corners[a], fa, v);
                     let (b0, b1) = opposite(&corners[b], fb, v);
-                    segment_distance(fb, a0, a1) > apart && segment_distance(fa, b0, b1) > apart
+                    // An edge wholly beyond the other face's plane is apart from it (most of a smooth
+                    // mesh's fans): segment distances only for the rest.
+                    (beyond_plane(fb, &[a0, a1], apart) || segment_distance(fb, a0, a1) > apart) && (beyond_plane(fa, &[b0, b1], apart) || segment_distance(fa, b0, b1) > apart)
                 }
                 2 => fa.n.dot(fb.n) > FOLDED_COS,
                 _ => false,
@@ -241,11 +243,22 @@ fn embedded(faces: &[Triangle], corners: &[[u32; 3]], magnitude: f64, threads: u
 /// `gap` (on either side; the distance to a triangle is at least that to its plane), else by
 /// their distance.
 fn at_least_apart(a: &Triangle, b: &Triangle, gap: f64) -> bool {
-    let beyond = |s: &Triangle, t: &Triangle| {
-        let h = t.p.map(|q| s.n.dot(q - s.p[0]));
-        s.n != DVec3::ZERO && (h.iter().all(|&x| x >= gap) || h.iter().all(|&x| x <= -gap))
-    };
-    beyond(b, a) || beyond(a, b) || triangle_distance(a, b) >= gap
+    beyond_plane(b, &a.p, gap) || beyond_plane(a, &b.p, gap) || triangle_distance(a, b) >= gap
+}
+
+/// Whether `points` all lie beyond the plane of `t` by `gap`, on one side: their convex hull (a
+/// triangle, an edge) is then at least `gap` from `t`, whose distance is at least its plane's.
+fn beyond_plane(t: &Triangle, points: &[DVec3], gap: f64) -> bool {
+    if t.n == DVec3::ZERO {
+        return false;
+    }
+    let (mut above, mut below) = (true, true);
+    for q in points {
+        let h = t.n.dot(*q - t.p[0]);
+        above &= h >= gap;
+        below &= h <= -gap;
+    }
+    above || below
 }
 
 /// The distance between two triangles: where they do not meet, the closest pair has a point on

@@ -286,7 +286,7 @@ pub const MF_MAX_BUILD_THREADS: usize = 1024;
 /// returns. `reach` is the largest distance from the mesh at which the media using the surface
 /// will be tracked: a macrofacet medium's shell top (`mf_medium_shell_top`; the largest of
 /// several media's), `INFINITY` when unknown. The surface builds its fast closed forms up to a
-/// few reaches from the mesh (a thin shell's surface builds in about 30 % less time) and
+/// few reaches from the mesh (a thin shell's surface builds in about a quarter less time) and
 /// searches beyond: its distances, gradients and frames do not depend on it (up to rounding),
 /// though a tracking call's segments may split differently, so that one seed may draw
 /// different, equally distributed, events. Building costs 30 to 50 µs of one core per triangle

@@ -31,7 +31,7 @@ namespace {
 const char* kUsage =
     "usage: mfrender scene.xml [-o out.exr] [--spp N] [--seed S] [--threads N] [--max-depth N]\n"
     "                [-D name=value]... [--shard I/N] [--media-boundaries] [--cast-exits]\n"
-    "                [--no-opaque-cores]\n"
+    "                [--no-opaque-cores] [--no-shadow-roulette]\n"
     "                [--quiet] [--check]\n"
     "                [--help]\n"
     "       mfrender merge -o out.exr part.mfpart...\n"
@@ -57,6 +57,11 @@ const char* kUsage =
     "                 outside its core that meets it ends there: its transmittance, below\n"
     "                 e^-750, rounds to 0; mf_track_opaque_core; a shallower one is kept with\n"
     "                 the probability its depth allows: mf_track_depth_roulette); the same\n"
+    "                 image, to noise\n"
+    "  --no-shadow-roulette  trace every next-event ray (default: one whose contribution g =\n"
+    "                 f w / p_light, relative to the path's throughput and the emitter's\n"
+    "                 radiance, is below 0.1 is traced with probability g / 0.1 and weighted by\n"
+    "                 its inverse, before any transmittance: a Russian roulette); the same\n"
     "                 image, to noise\n"
     "  --quiet        no progress bar and no summary line\n"
     "  --check        parse and build the scene, print a summary, do not render; every problem\n"
@@ -232,6 +237,8 @@ int mfrender_main(int argc, char** argv) {
                 bopts.media_find_exits = false;
             } else if (a == "--no-opaque-cores") {
                 bopts.opaque_cores = false;
+            } else if (a == "--no-shadow-roulette") {
+                bopts.shadow_roulette = false;
             } else if (a == "--quiet" || a == "-q") {
                 quiet = true;
             } else if (a == "--check") {

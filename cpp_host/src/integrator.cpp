@@ -144,6 +144,17 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
         return 0.0f;
     };
 
+    // The next-event ray's roulette (IntegratorSettings::shadow_roulette): the probability with
+    // which it is kept, or 0 when it is not (a number is drawn only for the rays it applies to).
+    // The probability is rounded up to the uniforms' grid of 2^-24, so that it is exactly the
+    // chance of `u < q` (a smaller one would be kept at u = 0 only, with too large a weight).
+    auto shadow_survival = [&](const Rgb& f, float w, float light_pdf) -> float {
+        const float g = f.max() * w / light_pdf;
+        if (!(g < cfg.shadow_roulette)) return 1.0f;
+        const float q = std::ceil(g / cfg.shadow_roulette * 0x1p24f) * 0x1p-24f;
+        return sampler.next_1d() < q ? q : 0.0f;
+    };
+
     // Next-event estimation: uniform emitter choice, MIS against eval_pdf.
     auto direct = [&](const Vec3& origin, const Medium* m, const MediumInteraction* from, const Vec3& ref, auto&& eval) -> Rgb {
         if (emitters.empty()) return Rgb(0.0f);
@@ -161,16 +172,18 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
                                                ? scene_.next_event_roulette(origin, es.wi, dist, sampler)
                                                : Scene::ShadowRoulette{};
         if (!(kept.survival > 0)) return Rgb(0.0f);
-        float f_pdf = 0.0f;
+        const float light_pdf = es.pdf * sel_pdf;
+        float f_pdf = 0.0f, w = 1.0f, survival = 1.0f;
         Rgb f(0.0f);
         Rgb T = shadow_transmittance(origin, es.wi, dist, m, from, sampler, kept, [&] {
             f = eval(es.wi, &f_pdf);
-            return !f.is_black();
+            if (f.is_black()) return false;
+            w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);
+            survival = shadow_survival(f, w, light_pdf);
+            return survival > 0;
         });
         if (T.is_black()) return Rgb(0.0f);
-        float light_pdf = es.pdf * sel_pdf;
-        float w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);
-        return f * es.Li * T * (w / light_pdf);
+        return f * es.Li * T * (w / light_pdf / survival);
     };
 
     auto russian_roulette = [&]() -> bool {
@@ -334,18 +347,16 @@ Rgb PathIntegrator::Li(Ray ray, const Medium* medium, Sampler& sampler) const {
             if (emitters[idx]->sample_li(hit.p, u, &es) && !es.Li.is_black() && es.pdf > 0 && (es.delta || nee_non_delta)) {
                 Vec3 wi_l = frame.to_local(es.wi);
                 Rgb f = bsdf.eval(at, wo_l, wi_l);
-                if (!f.is_black()) {
-                    float f_pdf = bsdf.pdf(at, wo_l, wi_l);
+                const float light_pdf = es.pdf * sel_pdf;
+                const float w = f.is_black() || es.delta ? 1.0f : nee_weight(light_pdf, bsdf.pdf(at, wo_l, wi_l));
+                const float survival = f.is_black() ? 0.0f : shadow_survival(f, w, light_pdf);
+                if (survival > 0) {
                     const Medium* m = medium;
                     if (vol && shape->is_medium_transition()) m = shape->target_medium(hit.ng, es.wi);
                     Vec3 o = offset_ray_origin(hit.p, hit.ng, es.wi);
                     float dist = std::isfinite(es.dist) ? length(hit.p + es.wi * es.dist - o) * (1.0f - 1e-4f) : kInf;
                     Rgb T = shadow_transmittance(o, es.wi, dist, vol ? m : nullptr, sampler);
-                    if (!T.is_black()) {
-                        float light_pdf = es.pdf * sel_pdf;
-                        float w = es.delta ? 1.0f : nee_weight(light_pdf, f_pdf);
-                        L += throughput() * f * es.Li * T * (w / light_pdf);
-                    }
+                    if (!T.is_black()) L += throughput() * f * es.Li * T * (w / light_pdf / survival);
                 }
             }
         }

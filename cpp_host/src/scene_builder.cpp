@@ -71,6 +71,7 @@ public:
         if (opts_.spp_override > 0) scene_->spp = opts_.spp_override;
         if (opts_.seed_override >= 0) scene_->seed = uint64_t(opts_.seed_override);
         if (opts_.max_depth_override >= -1) scene_->integrator.max_depth = opts_.max_depth_override;
+        if (!opts_.shadow_roulette) scene_->integrator.shadow_roulette = 0.0f;
         place_macrofacet_boundaries();
         if (opts_.media_find_exits) let_media_find_exits();
         for (auto& kv : media_) scene_->media.push_back(kv.second);

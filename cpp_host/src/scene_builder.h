@@ -39,6 +39,10 @@ struct BuildOptions {
     /// and play the depth roulette on shallower ones (Scene::shadow_roulette); false (mfrender
     /// --no-opaque-cores) tracks them all, for comparison: the same image, to noise.
     bool opaque_cores = true;
+    /// Play the next-event rays' contribution roulette (IntegratorSettings::shadow_roulette);
+    /// false (mfrender --no-shadow-roulette) traces every one, for comparison: the same image,
+    /// to noise.
+    bool shadow_roulette = true;
 };
 
 struct BuildReport {

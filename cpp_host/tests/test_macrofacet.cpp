@@ -561,7 +561,9 @@ TEST_CASE(boundary_form) {
 // A torus mesh shell cut by a floor (the shapes near its region): the tracker finds each ray's
 // exit from the enclosure (SceneBuilder::let_media_find_exits) and renders what casting a ray for
 // every exit renders (--cast-exits).
-TEST_CASE(media_find_their_exits) {
+// A scene `name`.xml: a torus mesh shell (32 x 12 quads) cut by a diffuse floor, lit by an area
+// light and a constant environment.
+static std::string torus_shell_scene(const std::string& name) {
     std::ostringstream obj;
     const int U = 32, V = 12;
     for (int i = 0; i < U; ++i)
@@ -572,15 +574,20 @@ TEST_CASE(media_find_their_exits) {
     auto at = [&](int i, int j) { return 1 + (i % U) * V + (j % V); };
     for (int i = 0; i < U; ++i)
         for (int j = 0; j < V; ++j) obj << "f " << at(i, j) << " " << at(i + 1, j) << " " << at(i + 1, j + 1) << " " << at(i, j + 1) << "\n";
-    write_file(work("exits_torus.obj"), obj.str());
+    write_file(work(name + "_torus.obj"), obj.str());
     const std::string xml = "<scene version=\"3.0.0\"><integrator type=\"volpath\"/>" + camera(3.0f, 40.0f, 24, 24, 64) +
                             medium_xml("mf", R"(<float name="sigma" value="0.01"/><string name="distribution" value="ggx"/><float name="alpha" value="0.3"/><string name="material" value="Au"/>)") +
-                            R"(<shape type="obj"><string name="filename" value=")" + work("exits_torus.obj") + R"("/><ref name="interior" id="mf"/></shape>
+                            R"(<shape type="obj"><string name="filename" value=")" + work(name + "_torus.obj") + R"("/><ref name="interior" id="mf"/></shape>
         <shape type="rectangle"><transform name="to_world"><scale value="2"/><translate z="-0.15"/></transform>
           <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
         <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><lookat origin="0, 1.5, 2" target="0, 0, 0" up="0, 0, 1"/></transform>
           <emitter type="area"><rgb name="radiance" value="5"/></emitter></shape><emitter type="constant"><rgb name="radiance" value="0.3"/></emitter></scene>)";
-    write_file(work("exits.xml"), xml);
+    write_file(work(name + ".xml"), xml);
+    return xml;
+}
+
+TEST_CASE(media_find_their_exits) {
+    const std::string xml = torus_shell_scene("exits");
     for (bool finds : {true, false}) {
         BuildOptions o;
         o.media_find_exits = finds;
@@ -589,6 +596,24 @@ TEST_CASE(media_find_their_exits) {
         CHECK(m && m->finds_exits() == finds);
     }
     expect_same_image(work("exits.xml"), "--cast-exits", "exits");
+}
+
+// The next-event rays' contribution roulette (IntegratorSettings::shadow_roulette) on the torus
+// shell and its floor: it draws (the same seed renders another image), and the image is the one
+// that traces every next-event ray (--no-shadow-roulette), to noise.
+TEST_CASE(shadow_roulette) {
+    const std::string xml = torus_shell_scene("roulette");
+    const auto threshold = [&](bool roulette) {
+        BuildOptions o;
+        o.shadow_roulette = roulette;
+        return build_scene(parse_scene_string(xml, work("roulette.xml"), {}), o, nullptr)->integrator.shadow_roulette;
+    };
+    CHECK(threshold(true) == kShadowRoulette && threshold(false) == 0.0f);
+    const std::string with = work("roulette_on.exr"), without = work("roulette_off.exr");
+    CHECK(run({work("roulette.xml"), "-o", with, "--quiet", "--seed", "3", "--spp", "4"}) == 0);
+    CHECK(run({work("roulette.xml"), "-o", without, "--quiet", "--seed", "3", "--spp", "4", "--no-shadow-roulette"}) == 0);
+    CHECK_MSG(read_file(with) != read_file(without), "the roulette changed no path");
+    expect_same_image(work("roulette.xml"), "--no-shadow-roulette", "shadow_roulette");
 }
 
 // A thin shell's opaque core (mf_track_opaque_core, Scene::add_opaque_core) ends the shadow rays

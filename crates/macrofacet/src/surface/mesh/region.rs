@@ -22,7 +22,7 @@
 use super::bvh::Bvh;
 use super::triangle::{Closest, Feature, Triangle};
 use crate::frame::rescaled;
-use crate::ordered::less;
+use crate::ordered::{less, more};
 use crate::parallel;
 use glam::DVec3;
 
@@ -122,7 +122,7 @@ impl FaceRegion {
             // A triangle at distance D from T is farther than any point of T's prism up to D/2
             // above or below it: heights up to half the gap need no test against it.
             let half_gap = 0.5 * gap_j;
-            let highest = height.iter().flatten().copied().fold(0.0, f64::max);
+            let highest = height.iter().flatten().copied().fold(0.0, more);
             if half_gap > highest {
                 break;
             }
@@ -169,8 +169,8 @@ impl FaceRegion {
                         }
                         None => 0.0,
                     };
-                    let best = others.iter().flatten().map(|b| b.certified_height(f, epsilon)).fold(by_cone.max(by_plane), f64::max);
-                    height[side][level] = height[side][level].min(best);
+                    let best = others.iter().flatten().map(|b| b.certified_height(f, epsilon)).fold(more(by_cone, by_plane), more);
+                    height[side][level] = less(height[side][level], best);
                 }
             }
         }
@@ -319,11 +319,11 @@ impl Cone {
     /// when that lies inside, else at an end.
     fn most(&self, w: DVec3) -> f64 {
         let c = self.ends;
-        let ends = c[0].dot(w).max(c[1].dot(w));
+        let ends = more(c[0].dot(w), c[1].dot(w));
         let Some(normal) = self.normal else { return ends };
         let q = w - w.dot(normal) * normal;
         let inside = c[0].cross(q).dot(normal) >= 0.0 && q.cross(c[1]).dot(normal) >= 0.0;
-        if inside && q.length_squared() > 0.0 { q.length().max(ends) } else { ends }
+        if inside && q.length_squared() > 0.0 { more(q.length(), ends) } else { ends }
     }
 
     /// `1 − cos γ` for the least angle `γ` between this cone and `other` (at the same corner),
@@ -331,7 +331,7 @@ impl Cone {
     /// common line.
     fn gap(&self, other: &Cone) -> Option<f64> {
         let (a, b) = (self, other);
-        let mut cos_gamma = [a.most(b.ends[0]), a.most(b.ends[1]), b.most(a.ends[0]), b.most(a.ends[1])].into_iter().fold(f64::NEG_INFINITY, f64::max);
+        let mut cos_gamma = [a.most(b.ends[0]), a.most(b.ends[1]), b.most(a.ends[0]), b.most(a.ends[1])].into_iter().fold(f64::NEG_INFINITY, more);
         if let Some(line) = a.cross.cross(b.cross).try_normalize() {
             for l in [line, -line] {
                 if a.most(l) >= 1.0 - 1e-12 && b.most(l) >= 1.0 - 1e-12 {
@@ -367,7 +367,7 @@ impl Along {
     fn new(u: DVec3, t: &Triangle, incentre: DVec3, other: &Triangle) -> Along {
         let extremes = |p: &[DVec3; 3]| {
             let dots = p.map(|x| u.dot(x));
-            [dots[0].min(dots[1]).min(dots[2]), dots[0].max(dots[1]).max(dots[2])]
+            [less(less(dots[0], dots[1]), dots[2]), more(more(dots[0], dots[1]), dots[2])]
         };
         Along { at_incentre: u.dot(incentre), corners: extremes(&t.p), reach: extremes(&other.p) }
     }

@@ -5,7 +5,8 @@
 // transmittance and scattering are delegated to the current Medium and its phase function, the
 // same way for every medium (a Dirac phase lobe, e.g. a gpis crossing, gets no NEE); null-BSDF
 // surfaces are crossed (changing the medium) by both path and shadow rays, any other surface
-// (dielectrics included) blocks shadow rays; Russian roulette from rr_depth.
+// (dielectrics included) blocks shadow rays; Russian roulette from rr_depth, and on next-event
+// rays by their unoccluded contribution (IntegratorSettings::shadow_roulette).
 #pragma once
 
 #include "sampler.h"
